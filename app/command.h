@@ -1,0 +1,40 @@
+#pragma once
+// Subcommand registry. Each app/cmd_<name>.cpp defines one subcommand and registers it with
+//   static const bool registered = authalic::app::register_command({order, setup});
+// where setup(CLI::App& parent) adds the subcommand, its options and its callback.
+// The callback returns an exit code; errors are thrown (InputError -> 2, ProcessingError -> 3).
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <string>
+
+#include "core/progress.h"
+
+namespace authalic::app {
+
+struct Command {
+  int order;  // position in --help
+  std::function<void(CLI::App& parent)> setup;
+};
+bool register_command(const Command& command);
+
+// Options every subcommand shares (set by main before the callback runs).
+struct GlobalOptions {
+  bool quiet = false;   // no progress, no informational lines
+  bool json = false;    // machine-readable summary on stdout
+  int threads = 0;      // 0 = OpenMP default
+};
+GlobalOptions& global_options();
+
+// Adds --quiet/--json/--threads to a subcommand.
+void add_common_options(CLI::App& sub);
+
+// Informational line on stderr (suppressed by --quiet or --json).
+void info(const std::string& line);
+// A ProgressFn that draws on a terminal (stderr is a tty, not --quiet/--json) and is silent otherwise.
+ProgressFn terminal_progress();
+
+// Exit code a subcommand's callback reports to main.
+void set_exit_code(int code);
+
+}  // namespace authalic::app

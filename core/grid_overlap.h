@@ -1,0 +1,52 @@
+#pragma once
+// Exact overlap of a mapped triangle mesh with the cells of a regular grid on its domain
+// (the equal-area cortical elements of Zou et al. 2011, section 5.2). Each triangle is clipped
+// against the cells it covers (Sutherland-Hodgman), so an element gets exactly the part of the
+// cortex that maps into it, not only the vertices that fall inside.
+#include <vector>
+
+#include "core/mesh.h"
+
+namespace authalic {
+
+// A regular grid of cols x rows cells over [x0, x0 + width] x [y0, y0 + height] (square: 1x1,
+// K x K; rectangle: 2x1, 2K x K). Cell (row, col) has id row * cols + col; row 0 is at y0 (bottom).
+struct GridSpec {
+  int cols = 32;
+  int rows = 32;
+  double x0 = 0.0, y0 = 0.0, width = 1.0, height = 1.0;
+  int num_cells() const { return cols * rows; }
+};
+
+// One piece of one triangle inside one cell.
+struct OverlapPiece {
+  int face;             // triangle index into F
+  int cell;             // cell id (row * cols + col)
+  double domain_area;   // area of the piece in the domain (map units^2)
+  double bary[3];       // barycentric coordinates of the piece's centroid in its triangle
+};
+
+// Pieces of every triangle of the planar map UV (#V x >=2, x,y used) with the grid cells, sorted
+// by (face, cell). Parts of triangles outside the grid are dropped. Deterministic for any thread count.
+std::vector<OverlapPiece> grid_overlap(const MatrixXd& UV, const MatrixXi& F, const GridSpec& grid);
+
+// Equal-area cells on the unit sphere: `bands` bands equal in z (hence equal in area, Archimedes)
+// times `sectors` equal longitude sectors (sphere elements: sectors = 2 * bands). Cell id =
+// band * sectors + sector; band 0 at z = -1, sector 0 starts at longitude -pi.
+struct SphereGridSpec {
+  int sectors = 64;
+  int bands = 32;
+  int num_cells() const { return sectors * bands; }
+};
+// Pieces of every triangle of a sphere map (#V x 3, any radius, centred at the origin) with the
+// sphere cells (computed in (longitude, z) coordinates, where the cells are rectangles and the
+// map is area-preserving up to the constant 1 per steradian; triangles crossing the date line are
+// split). domain_area is in steradians.
+std::vector<OverlapPiece> sphere_grid_overlap(const MatrixXd& S, const MatrixXi& F, const SphereGridSpec& grid);
+
+// Cortical area (surface units^2, mm^2 for cortex) that each cell receives: sum over pieces of
+// face_area_3d(face) * piece.domain_area / face_domain_area(face).
+VectorXd cell_surface_areas(const std::vector<OverlapPiece>& pieces, const VectorXd& face_area_3d,
+                            const VectorXd& face_domain_area, int num_cells);
+
+}  // namespace authalic

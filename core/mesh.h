@@ -1,0 +1,124 @@
+#pragma once
+// Triangle meshes as plain data (libigl style): V is #V by 3 vertex positions, F is #F by 3
+// vertex indices, counter-clockwise seen from outside. Everything in core/ takes and returns these.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <Eigen/Sparse>
+
+#include <string>
+#include <vector>
+
+namespace authalic {
+
+using MatrixXd = Eigen::MatrixXd;
+using MatrixXi = Eigen::MatrixXi;
+using VectorXd = Eigen::VectorXd;
+using VectorXi = Eigen::VectorXi;
+using SparseMatrix = Eigen::SparseMatrix<double>;
+
+// A triangle mesh: V (#V x 3, mm for cortical surfaces), F (#F x 3, 0-based vertex indices).
+struct TriMesh {
+  MatrixXd V;
+  MatrixXi F;
+  int num_vertices() const { return static_cast<int>(V.rows()); }
+  int num_faces() const { return static_cast<int>(F.rows()); }
+};
+
+// ---- geometry (core/geometry.cpp) --------------------------------------------------------
+
+// Per-face areas |e_ij x e_ik| / 2 (#F). Works for V with 2 or 3 columns.
+VectorXd face_areas(const MatrixXd& V, const MatrixXi& F);
+// Signed areas of a planar map (V with >= 2 columns, x,y used): positive = counter-clockwise.
+VectorXd signed_face_areas_2d(const MatrixXd& V, const MatrixXi& F);
+// Barycentric vertex areas, Zou et al. eq. 11: A_i = 1/6 sum_{f ∋ i} |e_ij x e_ik| (#V).
+// Vertices used by no face get 0.
+VectorXd barycentric_vertex_areas(const MatrixXd& V, const MatrixXi& F);
+// Cotangent Laplacian (libigl sign convention: negative semi-definite, L_ij = (cot a + cot b)/2
+// for an edge, L_ii = -sum_j L_ij). Sizes #V x #V.
+SparseMatrix cotmatrix(const MatrixXd& V, const MatrixXi& F);
+// Lumped (diagonal) barycentric mass matrix, diag = barycentric_vertex_areas.
+SparseMatrix massmatrix(const MatrixXd& V, const MatrixXi& F);
+// Area-weighted unit vertex normals (#V x 3); zero rows for unused vertices.
+MatrixXd vertex_normals(const MatrixXd& V, const MatrixXi& F);
+// Unit face normals (#F x 3).
+MatrixXd face_normals(const MatrixXd& V, const MatrixXi& F);
+// Interior angles (#F x 3): column c is the angle at corner c.
+MatrixXd corner_angles(const MatrixXd& V, const MatrixXi& F);
+
+// ---- connectivity and topology (core/topology.cpp) --------------------------------------
+
+// Undirected edges with their incident faces. Built once, read many times.
+struct EdgeTopology {
+  MatrixXi E;                     // #E x 2, E(e,0) < E(e,1)
+  std::vector<std::vector<int>> edge_faces;  // faces incident to each edge
+  MatrixXi FE;                    // #F x 3: FE(f,c) = edge opposite corner c, i.e. (F(f,c+1), F(f,c+2))
+};
+EdgeTopology edge_topology(const MatrixXi& F, int num_vertices);
+
+// Half-edge adjacency: for half-edge h = 3*f + c (from F(f,c) to F(f,(c+1)%3)), its twin or -1
+// on the boundary or at a non-manifold edge.
+VectorXi halfedge_twins(const MatrixXi& F, int num_vertices);
+
+// Boundary loops as ordered vertex lists, each oriented consistently with the faces (interior on the
+// left), longest first. Requires an edge-manifold mesh.
+std::vector<std::vector<int>> boundary_loops(const MatrixXi& F, int num_vertices);
+
+// Connected components over faces (sharing an edge or a vertex counts as connected): per-face
+// component id, ids 0..n-1 in order of first face.
+VectorXi face_components(const MatrixXi& F, int num_vertices, int* num_components = nullptr);
+
+struct TopologyReport {
+  int num_vertices_used = 0;     // vertices referenced by a face
+  int num_edges = 0;
+  int num_faces = 0;
+  int num_components = 0;
+  int num_boundary_loops = 0;
+  int euler_characteristic = 0;  // V - E + F over used vertices
+  int genus = 0;                 // per component sum; (2 - chi - b)/2 for one component
+  int non_manifold_edges = 0;    // edges with more than two faces
+  int non_manifold_vertices = 0; // vertices whose faces form more than one fan
+  int inconsistent_orientation_edges = 0;  // interior edges traversed the same way by both faces
+  int degenerate_faces = 0;      // repeated index or zero area
+  int duplicate_faces = 0;
+  bool is_manifold() const { return non_manifold_edges == 0 && non_manifold_vertices == 0; }
+  bool is_oriented() const { return inconsistent_orientation_edges == 0; }
+  bool is_disk() const {
+    return is_manifold() && num_components == 1 && num_boundary_loops == 1 && euler_characteristic == 1;
+  }
+  bool is_sphere() const {
+    return is_manifold() && num_components == 1 && num_boundary_loops == 0 && euler_characteristic == 2;
+  }
+  // One line, e.g. "1 component, 0 boundary loops, Euler characteristic 0, genus 1, manifold".
+  std::string summary() const;
+};
+TopologyReport analyze_topology(const MatrixXd& V, const MatrixXi& F);
+
+// Vertices closer than `tolerance` (mm) to an earlier vertex: result(i) = index of the first copy,
+// or i itself.
+VectorXi duplicate_vertices(const MatrixXd& V, double tolerance = 0.0);
+// Faces with a repeated index or area <= area_tolerance.
+std::vector<int> degenerate_faces(const MatrixXd& V, const MatrixXi& F, double area_tolerance = 0.0);
+
+// Flip faces so that every component is consistently oriented (BFS over edges); returns the
+// number of faces flipped, or -1 when the surface is not orientable (then F is unchanged).
+int orient_faces_consistently(MatrixXi& F, int num_vertices);
+
+// ---- submeshes (core/submesh.cpp) -------------------------------------------------------
+
+// A submesh plus index maps back to its parent.
+struct Submesh {
+  TriMesh mesh;
+  VectorXi vertex_to_parent;  // #mesh.V: parent vertex index
+  VectorXi face_to_parent;    // #mesh.F: parent face index
+  VectorXi parent_to_vertex;  // #parent V: submesh vertex index or -1
+};
+// Keep the faces with face_mask(f) != 0 and the vertices they use (in parent order).
+Submesh submesh_from_faces(const TriMesh& parent, const std::vector<bool>& face_mask);
+// Keep the faces whose three vertices all have vertex_mask(v) != 0.
+Submesh submesh_from_vertices(const TriMesh& parent, const std::vector<bool>& vertex_mask);
+
+// Midpoint (1-to-4) subdivision. New edge-midpoint vertices are appended after the originals,
+// so the first #V vertices of the result are the input's.
+TriMesh subdivide_midpoint(const TriMesh& mesh, int times = 1);
+
+}  // namespace authalic

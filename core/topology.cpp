@@ -1,0 +1,357 @@
+// Connectivity and topology of triangle meshes: edges, half-edge twins, boundary loops,
+// components, Euler characteristic and genus, manifoldness and orientation checks.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <queue>
+#include <sstream>
+#include <tuple>
+#include <unordered_map>
+
+#include "core/mesh.h"
+
+namespace authalic {
+
+namespace {
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(int a, int b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // smallest index is the root: deterministic
+  }
+};
+
+std::int64_t key(int a, int b, int n) { return static_cast<std::int64_t>(a) * n + b; }
+
+// Directed half-edges (from, to) of all faces, with their id 3f+c, sorted by (from, to, id).
+struct DirectedEdges {
+  std::vector<std::int64_t> keys;  // sorted keys
+  std::vector<int> ids;            // half-edge id for each key
+};
+
+DirectedEdges directed_edges(const MatrixXi& F, int n) {
+  std::vector<std::pair<std::int64_t, int>> he;
+  he.reserve(static_cast<std::size_t>(F.rows()) * 3);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) he.emplace_back(key(F(f, c), F(f, (c + 1) % 3), n), static_cast<int>(3 * f + c));
+  std::sort(he.begin(), he.end());
+  DirectedEdges d;
+  d.keys.reserve(he.size());
+  d.ids.reserve(he.size());
+  for (const auto& [k, id] : he) {
+    d.keys.push_back(k);
+    d.ids.push_back(id);
+  }
+  return d;
+}
+
+// Number of half-edges from a to b.
+std::pair<std::size_t, std::size_t> range_of(const DirectedEdges& d, std::int64_t k) {
+  auto lo = std::lower_bound(d.keys.begin(), d.keys.end(), k);
+  auto hi = std::upper_bound(lo, d.keys.end(), k);
+  return {static_cast<std::size_t>(lo - d.keys.begin()), static_cast<std::size_t>(hi - d.keys.begin())};
+}
+
+}  // namespace
+
+EdgeTopology edge_topology(const MatrixXi& F, int num_vertices) {
+  const int n = num_vertices;
+  std::vector<std::tuple<std::int64_t, int, int>> he;  // (undirected key, face, corner opposite)
+  he.reserve(static_cast<std::size_t>(F.rows()) * 3);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = F(f, (c + 1) % 3), b = F(f, (c + 2) % 3);
+      he.emplace_back(key(std::min(a, b), std::max(a, b), n), static_cast<int>(f), c);
+    }
+  std::sort(he.begin(), he.end());
+  EdgeTopology t;
+  t.FE.resize(F.rows(), 3);
+  std::vector<std::pair<int, int>> edges;
+  for (std::size_t i = 0; i < he.size();) {
+    std::size_t j = i;
+    const auto k = std::get<0>(he[i]);
+    const int e = static_cast<int>(edges.size());
+    edges.emplace_back(static_cast<int>(k / n), static_cast<int>(k % n));
+    t.edge_faces.emplace_back();
+    for (; j < he.size() && std::get<0>(he[j]) == k; ++j) {
+      t.edge_faces.back().push_back(std::get<1>(he[j]));
+      t.FE(std::get<1>(he[j]), std::get<2>(he[j])) = e;
+    }
+    i = j;
+  }
+  t.E.resize(static_cast<Eigen::Index>(edges.size()), 2);
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    t.E(static_cast<Eigen::Index>(e), 0) = edges[e].first;
+    t.E(static_cast<Eigen::Index>(e), 1) = edges[e].second;
+  }
+  return t;
+}
+
+VectorXi halfedge_twins(const MatrixXi& F, int num_vertices) {
+  const DirectedEdges d = directed_edges(F, num_vertices);
+  VectorXi twin = VectorXi::Constant(F.rows() * 3, -1);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = F(f, c), b = F(f, (c + 1) % 3);
+      const auto [lo, hi] = range_of(d, key(b, a, num_vertices));
+      const auto [slo, shi] = range_of(d, key(a, b, num_vertices));
+      if (hi - lo == 1 && shi - slo == 1) twin[3 * f + c] = d.ids[lo];  // exactly one face each way
+    }
+  return twin;
+}
+
+std::vector<std::vector<int>> boundary_loops(const MatrixXi& F, int num_vertices) {
+  // A boundary half-edge a->b has no opposite b->a; its face lies on its left, so following the
+  // half-edges themselves walks each loop with the interior on the left.
+  const DirectedEdges d = directed_edges(F, num_vertices);
+  std::vector<std::vector<int>> next_of(num_vertices);  // boundary half-edge targets from each vertex
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = F(f, c), b = F(f, (c + 1) % 3);
+      const auto [lo, hi] = range_of(d, key(b, a, num_vertices));
+      if (lo == hi) next_of[a].push_back(b);
+    }
+  std::vector<std::vector<int>> loops;
+  for (int start = 0; start < num_vertices; ++start) {
+    while (!next_of[start].empty()) {
+      std::vector<int> loop;
+      int v = start;
+      // Bounded walk: a non-manifold boundary could otherwise cycle.
+      for (int steps = 0; steps <= num_vertices && !next_of[v].empty(); ++steps) {
+        loop.push_back(v);
+        const int w = next_of[v].back();
+        next_of[v].pop_back();
+        v = w;
+        if (v == start) break;
+      }
+      loops.push_back(std::move(loop));
+    }
+  }
+  std::stable_sort(loops.begin(), loops.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
+  return loops;
+}
+
+VectorXi face_components(const MatrixXi& F, int num_vertices, int* num_components) {
+  UnionFind uf(num_vertices);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    uf.unite(F(f, 0), F(f, 1));
+    uf.unite(F(f, 0), F(f, 2));
+  }
+  VectorXi comp(F.rows());
+  std::unordered_map<int, int> id;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const int r = uf.find(F(f, 0));
+    auto it = id.find(r);
+    if (it == id.end()) it = id.emplace(r, static_cast<int>(id.size())).first;
+    comp[f] = it->second;
+  }
+  if (num_components) *num_components = static_cast<int>(id.size());
+  return comp;
+}
+
+std::vector<int> degenerate_faces(const MatrixXd& V, const MatrixXi& F, double area_tolerance) {
+  const VectorXd A = face_areas(V, F);
+  std::vector<int> out;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const bool repeated = F(f, 0) == F(f, 1) || F(f, 1) == F(f, 2) || F(f, 0) == F(f, 2);
+    if (repeated || !(A[f] > area_tolerance)) out.push_back(static_cast<int>(f));
+  }
+  return out;
+}
+
+VectorXi duplicate_vertices(const MatrixXd& V, double tolerance) {
+  const int n = static_cast<int>(V.rows());
+  VectorXi rep(n);
+  std::iota(rep.data(), rep.data() + n, 0);
+  if (tolerance <= 0) {
+    std::vector<int> order(n);
+    std::iota(order.begin(), order.end(), 0);
+    auto less = [&](int a, int b) {
+      for (int c = 0; c < V.cols(); ++c)
+        if (V(a, c) != V(b, c)) return V(a, c) < V(b, c);
+      return a < b;
+    };
+    std::sort(order.begin(), order.end(), less);
+    for (int i = 1; i < n; ++i) {
+      const int a = order[i - 1], b = order[i];
+      if ((V.row(a).array() == V.row(b).array()).all()) rep[b] = rep[a];
+    }
+    return rep;
+  }
+  // Spatial hash with cell = tolerance; compare against the 27 neighbouring cells.
+  std::unordered_map<std::int64_t, std::vector<int>> grid;
+  auto cell = [&](double x) { return static_cast<std::int64_t>(std::floor(x / tolerance)); };
+  auto hkey = [](std::int64_t i, std::int64_t j, std::int64_t k) {
+    return (i * 73856093) ^ (j * 19349663) ^ (k * 83492791);
+  };
+  const double tol2 = tolerance * tolerance;
+  for (int v = 0; v < n; ++v) {
+    const std::int64_t ci = cell(V(v, 0)), cj = cell(V.cols() > 1 ? V(v, 1) : 0), ck = cell(V.cols() > 2 ? V(v, 2) : 0);
+    int found = -1;
+    for (int di = -1; di <= 1 && found < 0; ++di)
+      for (int dj = -1; dj <= 1 && found < 0; ++dj)
+        for (int dk = -1; dk <= 1 && found < 0; ++dk) {
+          auto it = grid.find(hkey(ci + di, cj + dj, ck + dk));
+          if (it == grid.end()) continue;
+          for (int u : it->second)
+            if ((V.row(u) - V.row(v)).squaredNorm() <= tol2) {
+              found = rep[u];
+              break;
+            }
+        }
+    if (found >= 0) rep[v] = found;
+    grid[hkey(ci, cj, ck)].push_back(v);
+  }
+  return rep;
+}
+
+int orient_faces_consistently(MatrixXi& F, int num_vertices) {
+  const EdgeTopology t = edge_topology(F, num_vertices);
+  const Eigen::Index m = F.rows();
+  std::vector<int> flip(m, -1);  // -1 unvisited, 0 keep, 1 flip
+  const MatrixXi original = F;
+  auto directed_same = [&](int f, int g, int a, int b, int fa, int ga) {
+    // does face f (flipped by fa) traverse a->b in the same direction as g (flipped by ga)?
+    auto dir = [&](int face, int fl) {
+      for (int c = 0; c < 3; ++c)
+        if (F(face, c) == a && F(face, (c + 1) % 3) == b) return fl ? -1 : 1;
+      return fl ? 1 : -1;
+    };
+    return dir(f, fa) == dir(g, ga);
+  };
+  for (Eigen::Index seed = 0; seed < m; ++seed) {
+    if (flip[seed] >= 0) continue;
+    flip[seed] = 0;
+    std::queue<int> q;
+    q.push(static_cast<int>(seed));
+    while (!q.empty()) {
+      const int f = q.front();
+      q.pop();
+      for (int c = 0; c < 3; ++c) {
+        const int e = t.FE(f, c);
+        if (t.edge_faces[e].size() != 2) continue;
+        const int g = t.edge_faces[e][0] == f ? t.edge_faces[e][1] : t.edge_faces[e][0];
+        const int a = t.E(e, 0), b = t.E(e, 1);
+        if (flip[g] < 0) {
+          flip[g] = directed_same(f, g, a, b, flip[f], 0) ? 1 : 0;
+          q.push(g);
+        } else if (directed_same(f, g, a, b, flip[f], flip[g])) {
+          F = original;
+          return -1;  // Möbius-like: not orientable
+        }
+      }
+    }
+  }
+  int flipped = 0;
+  for (Eigen::Index f = 0; f < m; ++f)
+    if (flip[f] == 1) {
+      std::swap(F(f, 1), F(f, 2));
+      ++flipped;
+    }
+  return flipped;
+}
+
+TopologyReport analyze_topology(const MatrixXd& V, const MatrixXi& F) {
+  const int n = static_cast<int>(V.rows());
+  TopologyReport r;
+  r.num_faces = static_cast<int>(F.rows());
+  std::vector<char> used(n, 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) used[F(f, c)] = 1;
+  r.num_vertices_used = static_cast<int>(std::count(used.begin(), used.end(), 1));
+  r.degenerate_faces = static_cast<int>(degenerate_faces(V, F).size());
+  {
+    std::vector<std::array<int, 3>> sorted(F.rows());
+    for (Eigen::Index f = 0; f < F.rows(); ++f) {
+      sorted[f] = {F(f, 0), F(f, 1), F(f, 2)};
+      std::sort(sorted[f].begin(), sorted[f].end());
+    }
+    std::sort(sorted.begin(), sorted.end());
+    for (std::size_t i = 1; i < sorted.size(); ++i)
+      if (sorted[i] == sorted[i - 1]) ++r.duplicate_faces;
+  }
+  const EdgeTopology t = edge_topology(F, n);
+  r.num_edges = static_cast<int>(t.E.rows());
+  const DirectedEdges d = directed_edges(F, n);
+  UnionFind corners(static_cast<int>(F.rows() * 3));  // corner id 3f+c; fans of faces around a vertex
+  auto corner_of = [&](int f, int v) {
+    for (int c = 0; c < 3; ++c)
+      if (F(f, c) == v) return 3 * f + c;
+    return -1;
+  };
+  for (Eigen::Index e = 0; e < t.E.rows(); ++e) {
+    const auto& fs = t.edge_faces[e];
+    if (fs.size() > 2) {
+      ++r.non_manifold_edges;
+      continue;
+    }
+    if (fs.size() != 2) continue;
+    const int a = t.E(e, 0), b = t.E(e, 1);
+    const auto [lo, hi] = range_of(d, key(a, b, n));
+    if (hi - lo != 1) ++r.inconsistent_orientation_edges;  // both faces traverse a->b (or b->a)
+    for (int v : {a, b}) corners.unite(corner_of(fs[0], v), corner_of(fs[1], v));
+  }
+  {
+    std::vector<int> fan_root(n, -1);
+    std::vector<char> counted(n, 0);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int v = F(f, c);
+        const int root = corners.find(static_cast<int>(3 * f + c));
+        if (fan_root[v] < 0) {
+          fan_root[v] = root;
+        } else if (fan_root[v] != root && !counted[v]) {
+          counted[v] = 1;
+          ++r.non_manifold_vertices;
+        }
+      }
+  }
+  // Per component: chi = V - E + F and boundary loops give genus = (2 - chi - b) / 2.
+  int nc = 0;
+  const VectorXi comp = face_components(F, n, &nc);
+  r.num_components = nc;
+  std::vector<int> cv(nc, 0), ce(nc, 0), cf(nc, 0), cb(nc, 0);
+  std::vector<int> vcomp(n, -1);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    ++cf[comp[f]];
+    for (int c = 0; c < 3; ++c) vcomp[F(f, c)] = comp[f];
+  }
+  for (int v = 0; v < n; ++v)
+    if (vcomp[v] >= 0) ++cv[vcomp[v]];
+  for (Eigen::Index e = 0; e < t.E.rows(); ++e) ++ce[vcomp[t.E(e, 0)]];
+  const auto loops = boundary_loops(F, n);
+  r.num_boundary_loops = static_cast<int>(loops.size());
+  for (const auto& loop : loops)
+    if (!loop.empty()) ++cb[vcomp[loop.front()]];
+  r.euler_characteristic = r.num_vertices_used - r.num_edges + r.num_faces;
+  for (int c = 0; c < nc; ++c) r.genus += std::max(0, (2 - (cv[c] - ce[c] + cf[c]) - cb[c]) / 2);
+  return r;
+}
+
+std::string TopologyReport::summary() const {
+  std::ostringstream s;
+  s << num_components << (num_components == 1 ? " component, " : " components, ") << num_boundary_loops
+    << (num_boundary_loops == 1 ? " boundary loop, " : " boundary loops, ") << "Euler characteristic "
+    << euler_characteristic << ", genus " << genus;
+  if (is_manifold()) {
+    s << ", manifold";
+  } else {
+    s << ", non-manifold (" << non_manifold_edges << " edges with >2 faces, " << non_manifold_vertices
+      << " pinched vertices)";
+  }
+  if (inconsistent_orientation_edges > 0) s << ", " << inconsistent_orientation_edges << " inconsistently oriented edges";
+  if (degenerate_faces > 0) s << ", " << degenerate_faces << " degenerate faces";
+  if (duplicate_faces > 0) s << ", " << duplicate_faces << " duplicate faces";
+  return s.str();
+}
+
+}  // namespace authalic

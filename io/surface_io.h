@@ -1,0 +1,87 @@
+#pragma once
+// Cortical surfaces and per-vertex data, from files into core types and back.
+// Formats: FreeSurfer binary triangle surfaces (lh.white, ...), FreeSurfer patches (read),
+// GIFTI (.surf.gii, .gii.gz), VTK legacy (.vtk), XML PolyData (.vtp), PLY, OBJ, STL.
+#include <Eigen/Core>
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/mesh.h"
+
+namespace authalic::io {
+
+// A surface with where its coordinates live.
+struct Surface {
+  TriMesh mesh;
+  // Maps the file's coordinates to scanner RAS (mm). FreeSurfer surfaces store tkregister RAS:
+  // scanner = tkr + c_ras, taken from the volume-geometry footer (identity when it has none).
+  Eigen::Matrix4d to_scanner = Eigen::Matrix4d::Identity();
+  bool has_volume_geometry = false;   // FreeSurfer footer present and valid
+  Eigen::Vector3d c_ras = Eigen::Vector3d::Zero();
+  std::string space;                  // e.g. "tkregister RAS", "scanner RAS", GIFTI dataspace
+  std::string format;                 // "freesurfer", "gifti", "vtk", "vtp", "ply", "obj", "stl", "patch"
+  std::map<std::string, std::string> metadata;  // GIFTI metadata (AnatomicalStructurePrimary, ...)
+};
+
+// Reads any supported surface; the format is chosen by magic number, then by extension.
+// Throws InputError("<path>: <problem>; <hint>") on anything it cannot trust.
+Surface read_surface(const std::string& path);
+
+struct SurfaceWriteOptions {
+  std::string anatomical_structure;     // GIFTI AnatomicalStructurePrimary, e.g. "CortexLeft"
+  std::string geometric_type;           // GIFTI GeometricType: "Anatomical", "Flat", "Spherical"
+  std::string space = "NIFTI_XFORM_UNKNOWN";  // GIFTI dataspace of the pointset
+  std::map<std::string, std::string> metadata;  // extra metadata key/values (units, software, ...)
+};
+// Writes by extension (.surf.gii/.gii, .vtk, .vtp, .ply, .obj, .stl, or FreeSurfer binary for
+// anything else, e.g. lh.white). Atomic: a temporary file in the same folder, then rename.
+void write_surface(const std::string& path, const TriMesh& mesh, const SurfaceWriteOptions& options = {});
+
+// FreeSurfer flat patch (lh.*.patch.flat / .3d): the vertices it keeps and their x,y,z.
+struct Patch {
+  std::vector<int> vertices;   // original vertex indices
+  MatrixXd positions;          // #vertices x 3
+  std::vector<bool> on_border; // FreeSurfer's border flag (negative index in the file)
+};
+Patch read_freesurfer_patch(const std::string& path);
+// Writes a FreeSurfer patch (new format, -1 magic) for the given vertices and positions.
+void write_freesurfer_patch(const std::string& path, const std::vector<int>& vertices, const MatrixXd& positions);
+
+// Per-vertex scalars: FreeSurfer curv/thickness/sulc ("new curv" format), GIFTI func/shape
+// (first data array unless `column` is given), or a text file with one value a line.
+// expected_vertices >= 0 makes a length mismatch an InputError naming both counts.
+VectorXd read_per_vertex(const std::string& path, int expected_vertices = -1, int column = 0);
+// All columns of a GIFTI func/shape file (#V x #columns) with their names.
+MatrixXd read_per_vertex_columns(const std::string& path, std::vector<std::string>* names = nullptr,
+                                 int expected_vertices = -1);
+
+struct FuncWriteOptions {
+  std::vector<std::string> column_names;
+  std::string anatomical_structure;
+  std::map<std::string, std::string> metadata;  // written into the file's metadata
+};
+// GIFTI func/shape (.func.gii/.shape.gii): one float32 data array per column of `values`.
+// FreeSurfer curv format for any other extension (first column only).
+void write_per_vertex(const std::string& path, const MatrixXd& values, const FuncWriteOptions& options = {});
+
+// Per-vertex integer labels as a GIFTI label file (.label.gii) with a label table.
+void write_label_gifti(const std::string& path, const VectorXi& labels, const std::map<int, std::string>& names,
+                       const FuncWriteOptions& options = {});
+
+// A cortex region given as vertices: FreeSurfer label file (lh.cortex.label), a GIFTI label
+// file (non-zero keys) or a GIFTI shape/func mask (values > 0.5). Indices are 0-based.
+std::vector<int> read_region_vertices(const std::string& path, int expected_vertices = -1);
+
+// FreeSurfer label file: vertex indices and their coordinates/values.
+struct Label {
+  std::vector<int> vertices;
+  MatrixXd positions;  // #vertices x 3
+  VectorXd values;
+};
+Label read_freesurfer_label(const std::string& path);
+void write_freesurfer_label(const std::string& path, const Label& label);
+
+}  // namespace authalic::io

@@ -1,0 +1,42 @@
+#pragma once
+// 3D/4D volumes (PET, MRI) from NIfTI-1/2 (nifti-clib), MGH/MGZ and DICOM series (ITK/GDCM).
+#include <Eigen/Core>
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace authalic::io {
+
+// A scalar volume in memory. Voxel (i,j,k) is data[i + nx*(j + ny*k)] (x fastest, as NIfTI).
+// World coordinates are RAS mm (NIfTI/FreeSurfer scanner convention), so world = vox2ras * (i,j,k,1).
+struct Volume {
+  std::array<int, 3> dims{0, 0, 0};
+  std::vector<float> data;                   // scaled values (scl_slope/inter applied)
+  Eigen::Matrix4d vox2ras = Eigen::Matrix4d::Identity();
+  std::string orientation_source;            // "sform", "qform", "mgh", "dicom", ...
+  std::string source_path;
+  std::string units;                         // e.g. "Bq/mL" when known, else ""
+  std::size_t num_voxels() const { return static_cast<std::size_t>(dims[0]) * dims[1] * dims[2]; }
+  float at(int i, int j, int k) const {
+    return data[static_cast<std::size_t>(i) + static_cast<std::size_t>(dims[0]) * (j + static_cast<std::size_t>(dims[1]) * k)];
+  }
+  Eigen::Vector3d voxel_size() const {       // mm, column norms of the affine
+    return vox2ras.block<3, 3>(0, 0).colwise().norm().transpose();
+  }
+};
+
+struct VolumeReadOptions {
+  int frame = -1;          // for 4D files: which frame (0-based); -1 = none chosen
+  bool sum_frames = false; // for 4D files: sum all frames (e.g. a static image from dynamic frames)
+};
+
+// Reads NIfTI (.nii, .nii.gz), MGH/MGZ (.mgh, .mgz) or a DICOM series (a directory). The affine is
+// the sform when its code is > 0, else the qform when > 0 (stated in orientation_source); a file
+// with neither is refused. A 4D file needs options.frame or options.sum_frames.
+Volume read_volume(const std::string& path, const VolumeReadOptions& options = {});
+
+// Writes NIfTI-1 float32 (.nii or .nii.gz) with sform = qform = vox2ras (code 2: aligned). Atomic.
+void write_nifti(const std::string& path, const Volume& volume, const std::string& description = {});
+
+}  // namespace authalic::io
