@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages Authalic builds, tests and benchmarks with. Idempotent.
+set -euo pipefail
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+PACKAGES=(
+  build-essential cmake ninja-build pkg-config git
+  libeigen3-dev libsuitesparse-dev libvtk9-dev libinsighttoolkit5-dev
+  libnifti2-dev libgiftiio-dev zlib1g-dev libpng-dev
+  libcli11-dev nlohmann-json3-dev libgtest-dev
+  python3 python3-nibabel python3-numpy python3-scipy
+)
+export DEBIAN_FRONTEND=noninteractive
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "install_deps: installing ${#missing[@]} packages: ${missing[*]}" >&2
+  $SUDO apt-get -o DPkg::Lock::Timeout=600 update -qq
+  $SUDO apt-get -o DPkg::Lock::Timeout=600 install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+echo "install_deps: all ${#PACKAGES[@]} packages present" >&2

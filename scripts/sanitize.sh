@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Debug build with AddressSanitizer + UndefinedBehaviorSanitizer, then the whole test suite on it.
+# -O1 keeps the Eigen-heavy tests fast enough while keeping frames and line numbers.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DAUTHALIC_SANITIZE=ON \
+  -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" >/dev/null
+cmake --build build-asan -j"$(nproc)"
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+ctest --test-dir build-asan --output-on-failure -j"$(nproc)" --timeout 1200
