@@ -32,18 +32,48 @@ struct FlatRenderOptions {
   bool draw_colour_bar = true;
   std::string title;
 };
+// Where render_flat / render_element_grid put the domain: the pixel rectangle
+// [left, left + plot_width) x [top, top + plot_height) of an image width x height. Domain x maps
+// to column left + (x - x0) / domain_width * plot_width, domain y grows upwards; element-grid
+// line c (0 < c < grid_cols) is the pixel column floor(left + c * plot_width / grid_cols).
+struct FlatLayout {
+  int width = 0, height = 0;
+  int left = 0, top = 0, plot_width = 0, plot_height = 0;
+  int text_scale = 1;  // font scale of labels (5x7 glyphs times this)
+};
+FlatLayout flat_layout(const FlatRenderOptions& options, const ScalarColouring& colouring);
+
+// The colour of one value under a colouring: clamped to [vmin, vmax], NaN -> nan_colour.
+Rgb colour_of(const ScalarColouring& colouring, double value);
+
 // Flat map UV (#V x >=2) coloured per vertex (Gouraud interpolation), element grid overlaid.
+// The scalar is interpolated across each triangle and then mapped through the colour map (so a
+// diverging map never shows colours between its ends that the data do not have); a triangle
+// with a NaN vertex takes its nearest vertex's colour.
 io::RgbImage render_flat(const MatrixXd& UV, const MatrixXi& F, const ScalarColouring& colouring,
                          const FlatRenderOptions& options);
 
 // Element image (rows x cols values, row 0 = bottom of the domain), cells as flat colour blocks,
-// NaN cells drawn as nan_colour, with a colour bar and title.
+// NaN cells drawn as nan_colour, with a colour bar and title. Cell (r, c) covers the pixels
+// [left + c*cell, +cell) x [top + (rows-1-r)*cell, +cell) of element_grid_layout(...).
+FlatLayout element_grid_layout(int rows, int cols, const ScalarColouring& colouring, int cell_pixels,
+                               const std::string& title);
 io::RgbImage render_element_grid(const std::vector<double>& values, int rows, int cols, const ScalarColouring& colouring,
                                  int cell_pixels, const std::string& title);
 
 enum class View { Lateral, Medial, Superior, Inferior, Anterior, Posterior };
+// "lateral", "medial", ... (panel captions).
+std::string view_name(View view);
+
+// An orthographic camera in RAS: screen right, screen up, and the direction toward the viewer
+// (depth grows toward the viewer). Lateral of a left hemisphere looks from -x (anterior on the
+// screen's left); medial from +x; superior from +z with anterior up; anterior from +y.
+struct ViewBasis {
+  Eigen::Vector3d right, up, toward_viewer;
+};
+ViewBasis view_basis(View view, bool left_hemisphere);
 struct SurfaceRenderOptions {
-  int width = 500, height = 400;
+  int width = 500, height = 400;   // of each view panel; panels sit side by side
   bool left_hemisphere = true;     // decides which side "lateral" looks from (RAS: left = -x)
   std::string title;
   bool draw_colour_bar = true;
@@ -56,7 +86,14 @@ io::RgbImage render_surface_views(const MatrixXd& V, const MatrixXi& F, const Sc
                                   const VectorXi* boundary_labels = nullptr);
 
 // Histogram(s) as a PNG: one panel per series, e.g. the distortion metrics Υ and Λ.
+// width x height is the whole image; each panel gets width / #series. Non-finite values are
+// left out and counted in the panel's caption (n, mean, median).
 io::RgbImage render_histograms(const std::vector<std::vector<double>>& series, const std::vector<std::string>& titles,
                                int bins, int width, int height);
+
+// Images side by side (top-aligned) with `gap` pixels between them, and an optional caption
+// under each (empty = none); the background fills the rest.
+io::RgbImage compose_horizontal(const std::vector<io::RgbImage>& images, int gap, const std::vector<std::string>& captions = {},
+                                Rgb background = {255, 255, 255});
 
 }  // namespace authalic::analysis

@@ -49,4 +49,14 @@ std::vector<OverlapPiece> sphere_grid_overlap(const MatrixXd& S, const MatrixXi&
 VectorXd cell_surface_areas(const std::vector<OverlapPiece>& pieces, const VectorXd& face_area_3d,
                             const VectorXd& face_domain_area, int num_cells);
 
+// The cells' share of a per-face measure (e.g. surface area): each face hands its measure to the
+// cells in proportion to their overlap with it (#cells, id row * cols + col). Parts outside the
+// grid are lost. No piece list is built (fast rasterisation for the flows); deterministic.
+VectorXd rasterize_face_measure(const MatrixXd& UV, const MatrixXi& F, const VectorXd& face_measure, const GridSpec& grid);
+
+// Domain area of each face as the sum of its pieces (#F): the face_domain_area to pass to
+// cell_surface_areas when every face lies inside the grid (sphere maps, square maps), so that
+// each face hands out exactly its 3D area.
+VectorXd piece_face_areas(const std::vector<OverlapPiece>& pieces, int num_faces);
+
 }  // namespace authalic

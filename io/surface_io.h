@@ -4,6 +4,7 @@
 // GIFTI (.surf.gii, .gii.gz), VTK legacy (.vtk), XML PolyData (.vtp), PLY, OBJ, STL.
 #include <Eigen/Core>
 
+#include <array>
 #include <map>
 #include <optional>
 #include <string>
@@ -12,6 +13,17 @@
 #include "core/mesh.h"
 
 namespace authalic::io {
+
+// FreeSurfer's volume geometry ("footer" of binary surfaces): the volume the surface was made
+// from. tkregister RAS (the surface coordinates) + cras = scanner RAS.
+struct VolumeGeometry {
+  bool valid = false;
+  std::string filename;
+  std::array<int, 3> volume{0, 0, 0};
+  Eigen::Vector3d voxelsize = Eigen::Vector3d::Ones();
+  Eigen::Vector3d xras{-1, 0, 0}, yras{0, 0, 1}, zras{0, -1, 0};
+  Eigen::Vector3d cras = Eigen::Vector3d::Zero();
+};
 
 // A surface with where its coordinates live.
 struct Surface {
@@ -24,6 +36,7 @@ struct Surface {
   std::string space;                  // e.g. "tkregister RAS", "scanner RAS", GIFTI dataspace
   std::string format;                 // "freesurfer", "gifti", "vtk", "vtp", "ply", "obj", "stl", "patch"
   std::map<std::string, std::string> metadata;  // GIFTI metadata (AnatomicalStructurePrimary, ...)
+  VolumeGeometry volume_geometry;               // FreeSurfer footer as read (valid=false if none)
 };
 
 // Reads any supported surface; the format is chosen by magic number, then by extension.
@@ -35,6 +48,10 @@ struct SurfaceWriteOptions {
   std::string geometric_type;           // GIFTI GeometricType: "Anatomical", "Flat", "Spherical"
   std::string space = "NIFTI_XFORM_UNKNOWN";  // GIFTI dataspace of the pointset
   std::map<std::string, std::string> metadata;  // extra metadata key/values (units, software, ...)
+  // FreeSurfer binary: written as the footer when valid. GIFTI: when valid, the pointset gets a
+  // coordinate transform (dataspace -> NIFTI_XFORM_SCANNER_ANAT, translation by cras), as
+  // FreeSurfer's mris_convert does.
+  VolumeGeometry volume_geometry;
 };
 // Writes by extension (.surf.gii/.gii, .vtk, .vtp, .ply, .obj, .stl, or FreeSurfer binary for
 // anything else, e.g. lh.white). Atomic: a temporary file in the same folder, then rename.
@@ -49,6 +66,10 @@ struct Patch {
 Patch read_freesurfer_patch(const std::string& path);
 // Writes a FreeSurfer patch (new format, -1 magic) for the given vertices and positions.
 void write_freesurfer_patch(const std::string& path, const std::vector<int>& vertices, const MatrixXd& positions);
+
+// The faces of `parent` whose three vertices are all in the patch, with the patch's x,y,z for the
+// kept vertices (other vertices keep the parent's positions and are unused by the faces).
+TriMesh patch_mesh(const TriMesh& parent, const Patch& patch);
 
 // Per-vertex scalars: FreeSurfer curv/thickness/sulc ("new curv" format), GIFTI func/shape
 // (first data array unless `column` is given), or a text file with one value a line.

@@ -31,10 +31,36 @@ struct VolumeReadOptions {
   bool sum_frames = false; // for 4D files: sum all frames (e.g. a static image from dynamic frames)
 };
 
-// Reads NIfTI (.nii, .nii.gz), MGH/MGZ (.mgh, .mgz) or a DICOM series (a directory). The affine is
+// Reads NIfTI (.nii, .nii.gz), MGH/MGZ (.mgh, .mgz) or a DICOM series (a directory; the series with
+// the most files when there are several; ITK/GDCM, LPS converted to RAS). The affine is
 // the sform when its code is > 0, else the qform when > 0 (stated in orientation_source); a file
 // with neither is refused. A 4D file needs options.frame or options.sum_frames.
 Volume read_volume(const std::string& path, const VolumeReadOptions& options = {});
+
+// Writes a DICOM series (one file per slice, int16 with a rescale slope, PET modality) into the
+// folder `directory` (created if needed). For tests and phantoms: real PET comes from scanners.
+void write_dicom_series(const std::string& directory, const Volume& volume);
+
+// ---- MGH/MGZ (FreeSurfer volumes) ---------------------------------------------------------
+// Header of an .mgh/.mgz file (FreeSurfer's utils/mghendian/mri_identify: big-endian, 284 bytes).
+struct MghHeader {
+  std::array<int, 4> dims{0, 0, 0, 1};          // width, height, depth, frames
+  int type = 3;                                  // 0 uchar, 1 int32, 3 float32, 4 int16
+  bool good_ras = false;                         // goodRASflag: the orientation below is valid
+  Eigen::Vector3d delta = Eigen::Vector3d::Ones();  // voxel size (mm)
+  Eigen::Matrix3d Mdc = Eigen::Matrix3d::Identity(); // columns: unit directions of the i, j, k axes in RAS
+  Eigen::Vector3d c_ras = Eigen::Vector3d::Zero();   // scanner RAS of the volume centre
+};
+MghHeader read_mgh_header(const std::string& path);
+// Scanner vox2ras: Mdc*diag(delta), with the centre voxel (dims/2) at c_ras.
+Eigen::Matrix4d mgh_vox2ras(const MghHeader& header);
+// tkregister vox2ras (FreeSurfer's MRIxfmCRS2XYZtkreg): the same with c_ras = 0.
+Eigen::Matrix4d mgh_tkr_vox2ras(const MghHeader& header);
+// tkregister RAS -> scanner RAS = vox2ras * inverse(tkr vox2ras) (a translation by c_ras).
+// This is what takes FreeSurfer surface coordinates (lh.white) into the scanner space of the PET.
+Eigen::Matrix4d mgh_tkr_to_scanner(const MghHeader& header);
+// Writes float32 MGH (.mgh) or gzipped MGZ (.mgz) with the volume's affine. Atomic.
+void write_mgh(const std::string& path, const Volume& volume);
 
 // Writes NIfTI-1 float32 (.nii or .nii.gz) with sform = qform = vox2ras (code 2: aligned). Atomic.
 void write_nifti(const std::string& path, const Volume& volume, const std::string& description = {});

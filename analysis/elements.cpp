@@ -1,0 +1,539 @@
+// Equal-area cortical elements (see analysis/elements.h).
+#include "analysis/elements.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include "analysis/render.h"
+#include "analysis/report.h"
+#include "analysis/table_text.h"
+#include "core/error.h"
+#include "core/grid_overlap.h"
+#include "io/atomic_file.h"
+#include "io/image_io.h"
+#include "io/surface_io.h"
+#include "io/volume_io.h"
+
+namespace authalic::analysis {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string fmt(double x, int precision = 4) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g", precision, x);
+  return buf;
+}
+
+using EdgeKey = std::pair<int, int>;
+EdgeKey edge_key(int a, int b) { return a < b ? EdgeKey{a, b} : EdgeKey{b, a}; }
+
+// Traces each vertex the flattening appended (index >= nv) to the surface edge it splits.
+// Candidates: pairs of its neighbours that are an edge of the surface (or of an earlier inserted
+// vertex's parents) and no longer an edge of the map.
+void trace_inserted_vertices(ElementMap& m, const MatrixXi& F_surface, const std::string& map_name) {
+  const int nv = m.num_surface_vertices;
+  const int nm = static_cast<int>(m.D.rows());
+  if (nm == nv) return;
+  std::set<EdgeKey> surface_edges, map_edges;
+  std::map<EdgeKey, int> map_edge_faces;
+  for (int f = 0; f < F_surface.rows(); ++f)
+    for (int c = 0; c < 3; ++c) surface_edges.insert(edge_key(F_surface(f, c), F_surface(f, (c + 1) % 3)));
+  std::vector<std::set<int>> ring(static_cast<std::size_t>(nm));
+  for (int f = 0; f < m.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = m.F(f, c), b = m.F(f, (c + 1) % 3);
+      map_edges.insert(edge_key(a, b));
+      ++map_edge_faces[edge_key(a, b)];
+      ring[static_cast<std::size_t>(a)].insert(b);
+      ring[static_cast<std::size_t>(b)].insert(a);
+    }
+  // Edges that existed before the splits: the surface's, plus those an inserted corner vertex made.
+  std::set<EdgeKey> known = surface_edges;
+  for (int w = nv; w < nm; ++w) {
+    const auto& r = ring[static_cast<std::size_t>(w)];
+    std::vector<int> nb(r.begin(), r.end());
+    std::vector<EdgeKey> candidates;
+    for (std::size_t i = 0; i < nb.size(); ++i)
+      for (std::size_t j = i + 1; j < nb.size(); ++j) {
+        const int p = nb[i], q = nb[j];
+        if (p >= w || q >= w) continue;
+        const EdgeKey e = edge_key(p, q);
+        if (known.count(e) && !map_edges.count(e)) candidates.push_back(e);
+      }
+    if (candidates.size() != 1)
+      throw InputError(map_name + ": map vertex " + std::to_string(w) + " (appended by the flattening) cannot be traced to " +
+                       (candidates.empty() ? std::string("a") : std::string("a unique")) +
+                       " surface edge it splits; give the map computed from this surface (its vertices first, in order)");
+    const int p = candidates[0].first, q = candidates[0].second;
+    bool on_boundary = false;
+    for (int x : r)
+      if (map_edge_faces[edge_key(w, x)] == 1) on_boundary = true;
+    double t = 0.5;  // ear split: the 3D midpoint (core/conformal_map.h)
+    if (on_boundary && m.D.cols() == 2) {
+      // Corner split: placed by arc length along the boundary edge; read the fraction from the map.
+      const double dp = (m.D.row(w) - m.D.row(p)).norm(), dq = (m.D.row(q) - m.D.row(w)).norm();
+      if (dp + dq > 0) t = dp / (dp + dq);
+    }
+    m.V3.row(w) = (1 - t) * m.V3.row(p) + t * m.V3.row(q);
+    const double vp = m.values(p), vq = m.values(q);
+    m.values(w) = (1 - t) * vp + t * vq;
+    known.insert(edge_key(p, w));
+    known.insert(edge_key(w, q));
+  }
+  m.inserted_vertices = nm - nv;
+  m.notes.push_back(std::to_string(nm - nv) + " vertices appended by the flattening were traced to the surface edges they split");
+}
+
+}  // namespace
+
+std::string to_string(ElementDomain domain) {
+  switch (domain) {
+    case ElementDomain::Square: return "square";
+    case ElementDomain::Rectangle: return "rectangle";
+    case ElementDomain::Sphere: return "sphere";
+  }
+  return "square";
+}
+
+ElementDomain parse_element_domain(const std::string& name, const std::string& what) {
+  if (name == "square") return ElementDomain::Square;
+  if (name == "rectangle" || name == "rect") return ElementDomain::Rectangle;
+  if (name == "sphere") return ElementDomain::Sphere;
+  throw InputError(what + ": unknown domain '" + name + "'; use square, rectangle or sphere");
+}
+
+ElementGrid element_grid(ElementDomain domain, int k) {
+  if (k < 1 || k > 4096) throw InputError("--k: " + std::to_string(k) + " is out of range; use 1..4096");
+  ElementGrid g;
+  g.domain = domain;
+  g.k = k;
+  g.rows = k;
+  g.cols = domain == ElementDomain::Square ? k : 2 * k;
+  return g;
+}
+
+std::string hemisphere_of(const std::map<std::string, std::string>& metadata, const std::string& path) {
+  const auto it = metadata.find("AnatomicalStructurePrimary");
+  if (it != metadata.end()) {
+    if (it->second.find("Left") != std::string::npos) return "left";
+    if (it->second.find("Right") != std::string::npos) return "right";
+  }
+  std::string name = path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
+  for (char& ch : name) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  auto has = [&](const char* s) { return name.find(s) != std::string::npos; };
+  if (name.rfind("lh.", 0) == 0 || has("hemi-l") || has("left")) return "left";
+  if (name.rfind("rh.", 0) == 0 || has("hemi-r") || has("right")) return "right";
+  return "unknown";
+}
+
+int element_of_point(const ElementGrid& grid, const double* p) {
+  double u, v;  // in [0,1]
+  if (grid.domain == ElementDomain::Sphere) {
+    const double r = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    const double z = r > 0 ? p[2] / r : 0.0;
+    u = (std::atan2(p[1], p[0]) + M_PI) / (2 * M_PI);
+    v = (z + 1) / 2;
+  } else {
+    u = grid.domain == ElementDomain::Rectangle ? p[0] / 2.0 : p[0];
+    v = p[1];
+  }
+  const int col = std::clamp(static_cast<int>(std::floor(u * grid.cols)), 0, grid.cols - 1);
+  const int row = std::clamp(static_cast<int>(std::floor(v * grid.rows)), 0, grid.rows - 1);
+  return row * grid.cols + col;
+}
+
+ElementMap prepare_element_map(const MatrixXd& V, const MatrixXi& F, const MatrixXd& map_V, const MatrixXi& map_F,
+                               const VectorXd& values, ElementDomain domain, const std::string& map_name) {
+  const int nv = static_cast<int>(V.rows()), nm = static_cast<int>(map_V.rows());
+  if (values.size() != nv)
+    throw InputError("values: " + std::to_string(values.size()) + " values for a surface of " + std::to_string(nv) +
+                     " vertices; sample the PET on this surface");
+  if (nm < nv)
+    throw InputError(map_name + ": the map has " + std::to_string(nm) + " vertices but the surface has " + std::to_string(nv) +
+                     "; give the map computed from this surface");
+  if (map_F.rows() == 0) throw InputError(map_name + ": the map has no triangles");
+  if (map_F.minCoeff() < 0 || map_F.maxCoeff() >= nm) throw InputError(map_name + ": triangle indices out of range");
+  if (!map_V.allFinite()) throw InputError(map_name + ": the map has non-finite coordinates");
+  ElementMap m;
+  m.num_surface_vertices = nv;
+  m.F = map_F;
+  m.V3 = MatrixXd::Zero(nm, 3);
+  m.V3.topRows(nv) = V.leftCols(3);
+  m.values = VectorXd::Constant(nm, kNaN);
+  m.values.head(nv) = values;
+
+  // Bounding box of the vertices the map's triangles use.
+  std::vector<bool> used(static_cast<std::size_t>(nm), false);
+  for (int f = 0; f < map_F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) used[static_cast<std::size_t>(map_F(f, c))] = true;
+
+  if (domain == ElementDomain::Sphere) {
+    if (map_V.cols() < 3) throw InputError(map_name + ": a sphere map needs x, y, z coordinates");
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    double mean_r = 0;
+    int n = 0;
+    for (int v = 0; v < nm; ++v)
+      if (used[static_cast<std::size_t>(v)]) {
+        mean += map_V.row(v).head<3>().transpose();
+        mean_r += map_V.row(v).head<3>().norm();
+        ++n;
+      }
+    mean /= n;
+    mean_r /= n;
+    if (!(mean_r > 0) || mean.norm() > 0.05 * mean_r)
+      throw InputError(map_name + ": not a sphere map centred at the origin (centre offset " + fmt(mean.norm()) +
+                       " for radius " + fmt(mean_r) + "); pass --domain square or rectangle for flat maps");
+    double worst = 0;
+    m.D.resize(nm, 3);
+    for (int v = 0; v < nm; ++v) {
+      const double r = map_V.row(v).head<3>().norm();
+      if (used[static_cast<std::size_t>(v)]) worst = std::max(worst, std::abs(r / mean_r - 1));
+      m.D.row(v) = r > 0 ? Eigen::RowVector3d(map_V.row(v).head<3>() / r) : Eigen::RowVector3d(0, 0, 1);
+    }
+    if (worst > 0.01)
+      m.notes.push_back("sphere map radii vary by up to " + fmt(100 * worst, 3) + "%; vertices were projected onto the unit sphere");
+  } else {
+    const double W = domain == ElementDomain::Rectangle ? 2.0 : 1.0;
+    if (map_V.cols() >= 3) {
+      double zmax = 0, xy = 0;
+      for (int v = 0; v < nm; ++v)
+        if (used[static_cast<std::size_t>(v)]) {
+          zmax = std::max(zmax, std::abs(map_V(v, 2)));
+          xy = std::max(xy, map_V.row(v).head<2>().cwiseAbs().maxCoeff());
+        }
+      if (zmax > 1e-6 * std::max(1.0, xy))
+        throw InputError(map_name + ": the map is not flat (|z| up to " + fmt(zmax) + "); pass --domain sphere for sphere maps");
+    }
+    double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+    for (int v = 0; v < nm; ++v)
+      if (used[static_cast<std::size_t>(v)]) {
+        x0 = std::min(x0, map_V(v, 0));
+        x1 = std::max(x1, map_V(v, 0));
+        y0 = std::min(y0, map_V(v, 1));
+        y1 = std::max(y1, map_V(v, 1));
+      }
+    const double tol = 1e-6;
+    m.D = map_V.leftCols(2);
+    const bool inside = x0 >= -tol && x1 <= W + tol && y0 >= -tol && y1 <= 1 + tol;
+    if (!inside) {
+      const double aspect = (x1 - x0) / (y1 - y0);
+      if (!(std::abs(aspect / W - 1) < 0.02))
+        throw InputError(map_name + ": the map spans [" + fmt(x0) + ", " + fmt(x1) + "] x [" + fmt(y0) + ", " + fmt(y1) +
+                         "], which is not the " + to_string(domain) + " domain [0," + fmt(W) + "] x [0,1] (aspect " +
+                         fmt(aspect) + "); give the authalic map of this domain or choose --domain");
+      for (int v = 0; v < nm; ++v) {
+        m.D(v, 0) = (map_V(v, 0) - x0) / (x1 - x0) * W;
+        m.D(v, 1) = (map_V(v, 1) - y0) / (y1 - y0);
+      }
+      m.notes.push_back("the map was rescaled from its bounding box [" + fmt(x0) + ", " + fmt(x1) + "] x [" + fmt(y0) + ", " +
+                        fmt(y1) + "] onto the " + to_string(domain) + " domain");
+    }
+  }
+  trace_inserted_vertices(m, F, map_name);
+  return m;
+}
+
+ElementResult compute_elements(const ElementMap& map, const ElementGrid& grid, const Eigen::Matrix4d& to_scanner) {
+  const int ncell = grid.num_elements();
+  std::vector<OverlapPiece> pieces;
+  if (grid.domain == ElementDomain::Sphere) {
+    SphereGridSpec s;
+    s.sectors = grid.cols;
+    s.bands = grid.rows;
+    pieces = sphere_grid_overlap(map.D, map.F, s);
+  } else {
+    GridSpec g;
+    g.cols = grid.cols;
+    g.rows = grid.rows;
+    g.width = grid.domain == ElementDomain::Rectangle ? 2.0 : 1.0;
+    g.height = 1.0;
+    pieces = grid_overlap(map.D, map.F, g);
+  }
+  const VectorXd area3d = face_areas(map.V3, map.F);
+  const VectorXd area_domain = piece_face_areas(pieces, static_cast<int>(map.F.rows()));
+
+  // Accumulate in piece order (sorted by face, then cell): deterministic for any thread count.
+  std::vector<double> area(ncell, 0.0), value_area(ncell, 0.0), weighted_value(ncell, 0.0);
+  std::vector<Eigen::Vector3d> weighted_centroid(ncell, Eigen::Vector3d::Zero());
+  for (const OverlapPiece& p : pieces) {
+    const double fd = area_domain(p.face);
+    if (!(fd > 0)) continue;
+    const double a = area3d(p.face) * p.domain_area / fd;
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    double value = 0;
+    for (int k = 0; k < 3; ++k) {
+      const int v = map.F(p.face, k);
+      centroid += p.bary[k] * map.V3.row(v).transpose();
+      value += p.bary[k] * map.values(v);
+    }
+    area[p.cell] += a;
+    weighted_centroid[p.cell] += a * centroid;
+    if (std::isfinite(value)) {
+      value_area[p.cell] += a;
+      weighted_value[p.cell] += a * value;
+    }
+  }
+
+  ElementResult r;
+  r.block.elements.resize(ncell);
+  for (int c = 0; c < ncell; ++c) {
+    Element& e = r.block.elements[c];
+    e.id = c;
+    e.row = c / grid.cols;
+    e.col = c % grid.cols;
+    e.area_mm2 = area[c];
+    if (area[c] > 0) e.centroid = (to_scanner * (weighted_centroid[c] / area[c]).homogeneous()).head<3>();
+    if (value_area[c] > 0) e.value = weighted_value[c] / value_area[c];
+  }
+  // Vertices: the surface's vertices used by the map's triangles, by the cell of their map point.
+  const int nv = map.num_surface_vertices;
+  std::vector<bool> used(static_cast<std::size_t>(map.D.rows()), false);
+  for (int f = 0; f < map.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) used[static_cast<std::size_t>(map.F(f, k))] = true;
+  r.vertex_element = VectorXi::Constant(nv, -1);
+  for (int v = 0; v < nv; ++v) {
+    if (!used[static_cast<std::size_t>(v)]) continue;
+    double p[3] = {map.D(v, 0), map.D(v, 1), map.D.cols() > 2 ? map.D(v, 2) : 0.0};
+    const int c = element_of_point(grid, p);
+    r.vertex_element(v) = c;
+    ++r.block.elements[c].n_vertices;
+  }
+  double sum = 0, sum2 = 0;
+  for (double a : area) sum += a;
+  const double mean = sum / ncell;
+  for (double a : area) sum2 += (a - mean) * (a - mean);
+  r.total_area_mm2 = sum;
+  r.area_cv = mean > 0 ? std::sqrt(sum2 / ncell) / mean : 0.0;
+  return r;
+}
+
+std::vector<double> block_values(const ElementBlock& block) {
+  std::vector<double> out;
+  out.reserve(block.elements.size());
+  for (const auto& e : block.elements) out.push_back(e.value);
+  return out;
+}
+
+std::vector<double> block_areas(const ElementBlock& block) {
+  std::vector<double> out;
+  out.reserve(block.elements.size());
+  for (const auto& e : block.elements) out.push_back(e.area_mm2);
+  return out;
+}
+
+// ---- files -------------------------------------------------------------------------------
+
+std::string element_sidecar_path(const std::string& csv_path) {
+  const std::string ext = ".csv";
+  if (csv_path.size() > ext.size() && csv_path.compare(csv_path.size() - ext.size(), ext.size(), ext) == 0)
+    return csv_path.substr(0, csv_path.size() - ext.size()) + ".json";
+  return csv_path + ".json";
+}
+
+void write_element_table(const std::string& csv_path, const ElementTable& table) {
+  std::string csv = "id,hemisphere,row,col,area_mm2,centroid_x_mm,centroid_y_mm,centroid_z_mm,value,n_vertices\n";
+  csv.reserve(static_cast<std::size_t>(table.num_values()) * 96 + csv.size());
+  for (const auto& b : table.blocks) {
+    if (static_cast<int>(b.elements.size()) != table.grid.num_elements())
+      throw std::logic_error("write_element_table: block size does not match the grid");
+    for (const auto& e : b.elements) {
+      csv += std::to_string(e.id);
+      csv += ',';
+      csv += b.hemisphere;
+      csv += ',';
+      csv += std::to_string(e.row);
+      csv += ',';
+      csv += std::to_string(e.col);
+      for (double x : {e.area_mm2, e.centroid.x(), e.centroid.y(), e.centroid.z(), e.value}) {
+        csv += ',';
+        append_number(csv, x);
+      }
+      csv += ',';
+      csv += std::to_string(e.n_vertices);
+      csv += '\n';
+    }
+  }
+  nlohmann::json j;
+  j["format"] = "authalic-element-table";
+  j["version"] = 1;
+  j["domain"] = to_string(table.grid.domain);
+  j["k"] = table.grid.k;
+  j["rows"] = table.grid.rows;
+  j["cols"] = table.grid.cols;
+  j["hemispheres"] = nlohmann::json::array();
+  for (const auto& b : table.blocks) j["hemispheres"].push_back(b.hemisphere);
+  j["normalisation"] = table.normalisation;
+  j["units"] = table.units;
+  j["subject_id"] = table.subject_id;
+  j["age"] = std::isfinite(table.age) ? nlohmann::json(table.age) : nlohmann::json(nullptr);
+  j["columns"] = {{"id", "row * cols + col"},
+                  {"row", "0 = bottom of the domain (y = 0; sphere: z = -1)"},
+                  {"col", "0 = left of the domain (x = 0; sphere: longitude -pi)"},
+                  {"area_mm2", "cortical area mapped into the element (mm^2)"},
+                  {"centroid_x_mm", "area-weighted centroid, scanner RAS (mm)"},
+                  {"value", "area-weighted mean value (" + (table.units.empty() ? std::string("input units") : table.units) + ")"},
+                  {"n_vertices", "surface vertices whose map point lies in the element"}};
+  j["metadata"] = table.metadata;
+  io::write_file_atomically(element_sidecar_path(csv_path), j.dump(2) + "\n");
+  io::write_file_atomically(csv_path, csv);
+}
+
+ElementTable read_element_table(const std::string& csv_path) {
+  const std::string sidecar = element_sidecar_path(csv_path);
+  ElementTable t;
+  {
+    std::ifstream in(sidecar);
+    if (!in)
+      throw InputError(sidecar + ": cannot read the element table's JSON sidecar; element tables are written by "
+                                 "`authalic elements` or `authalic run` as a .csv with a .json beside it");
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(in);
+      if (j.value("format", "") != "authalic-element-table")
+        throw InputError(sidecar + ": not an authalic element-table sidecar (\"format\" is not \"authalic-element-table\")");
+      const int version = j.at("version").get<int>();
+      if (version != 1)
+        throw InputError(sidecar + ": element-table version " + std::to_string(version) +
+                         " is not supported by this authalic (version 1); update authalic");
+      const ElementDomain domain = parse_element_domain(j.at("domain").get<std::string>(), sidecar + ": domain");
+      t.grid = element_grid(domain, j.at("k").get<int>());
+      if (j.at("rows").get<int>() != t.grid.rows || j.at("cols").get<int>() != t.grid.cols)
+        throw InputError(sidecar + ": rows/cols do not match domain " + to_string(domain) + " at k = " + std::to_string(t.grid.k));
+      for (const auto& h : j.at("hemispheres")) t.blocks.push_back({h.get<std::string>(), {}});
+      t.normalisation = j.value("normalisation", "none");
+      t.units = j.value("units", "");
+      t.subject_id = j.value("subject_id", "");
+      if (j.contains("age") && j["age"].is_number()) t.age = j["age"].get<double>();
+      if (j.contains("metadata") && j["metadata"].is_object())
+        for (const auto& [key, value] : j["metadata"].items())
+          t.metadata[key] = value.is_string() ? value.get<std::string>() : value.dump();
+    } catch (const nlohmann::json::exception& e) {
+      throw InputError(sidecar + ": invalid element-table sidecar (" + std::string(e.what()) + ")");
+    }
+    if (t.blocks.empty()) throw InputError(sidecar + ": lists no hemisphere");
+  }
+  std::string text;
+  if (!read_text_file(csv_path, text)) throw InputError(csv_path + ": cannot read the element table");
+  const int ne = t.grid.num_elements();
+  std::map<std::string, int> block_of;
+  for (std::size_t b = 0; b < t.blocks.size(); ++b) {
+    t.blocks[b].elements.assign(static_cast<std::size_t>(ne), Element{});
+    block_of[t.blocks[b].hemisphere] = static_cast<int>(b);
+  }
+  std::vector<char> seen(static_cast<std::size_t>(ne) * t.blocks.size(), 0);
+  CsvCursor cur(text, csv_path);
+  cur.expect_header("id,hemisphere,row,col,area_mm2,centroid_x_mm,centroid_y_mm,centroid_z_mm,value,n_vertices");
+  std::size_t count = 0;
+  while (cur.next_line()) {
+    Element e;
+    e.id = cur.integer();
+    const std::string_view hemi = cur.field();
+    e.row = cur.integer();
+    e.col = cur.integer();
+    e.area_mm2 = cur.number();
+    e.centroid.x() = cur.number();
+    e.centroid.y() = cur.number();
+    e.centroid.z() = cur.number();
+    e.value = cur.number();
+    e.n_vertices = cur.integer();
+    cur.end_line();
+    const auto it = block_of.find(std::string(hemi));
+    if (it == block_of.end()) cur.fail("hemisphere '" + std::string(hemi) + "' is not listed in the sidecar");
+    if (e.id < 0 || e.id >= ne || e.row != e.id / t.grid.cols || e.col != e.id % t.grid.cols)
+      cur.fail("element id " + std::to_string(e.id) + " does not match row " + std::to_string(e.row) + ", col " +
+               std::to_string(e.col) + " of a " + std::to_string(t.grid.rows) + " x " + std::to_string(t.grid.cols) + " grid");
+    char& s = seen[static_cast<std::size_t>(it->second) * ne + e.id];
+    if (s) cur.fail("element " + std::to_string(e.id) + " of hemisphere " + std::string(hemi) + " appears twice");
+    s = 1;
+    t.blocks[static_cast<std::size_t>(it->second)].elements[static_cast<std::size_t>(e.id)] = e;
+    ++count;
+  }
+  if (count != seen.size())
+    throw InputError(csv_path + ": has " + std::to_string(count) + " element rows, expected " + std::to_string(seen.size()) +
+                     " (" + std::to_string(t.blocks.size()) + " hemisphere(s) x " + std::to_string(ne) + ")");
+  return t;
+}
+
+}  // namespace authalic::analysis
+
+// ---- exported element images --------------------------------------------------------------
+
+namespace authalic::analysis {
+
+ElementOutputPaths write_element_outputs(const std::string& prefix, const ElementTable& table, const ElementResult& result,
+                                         const MatrixXd& V_scanner, const MatrixXi& F, bool left) {
+  if (table.blocks.size() != 1) throw std::logic_error("write_element_outputs: expects a one-block table");
+  ElementOutputPaths p;
+  p.csv = prefix + ".csv";
+  p.sidecar = element_sidecar_path(p.csv);
+  p.nifti = prefix + ".nii.gz";
+  p.area_nifti = prefix + "_area.nii.gz";
+  p.png = prefix + ".png";
+  p.png_3d = prefix + "_3d.png";
+  p.label = prefix + ".label.gii";
+  const ElementGrid& g = table.grid;
+  const ElementBlock& block = table.blocks[0];
+  const std::string units = table.units.empty() ? std::string("input units") : table.units;
+
+  write_element_table(p.csv, table);
+
+  io::Volume image;
+  image.dims = {g.cols, g.rows, 1};
+  image.vox2ras = Eigen::Matrix4d::Identity();
+  image.data.resize(static_cast<std::size_t>(g.num_elements()));
+  for (const auto& e : block.elements) image.data[static_cast<std::size_t>(e.id)] = static_cast<float>(e.value);
+  io::write_nifti(p.nifti, image, "authalic element values (" + units + "), " + to_string(g.domain) + " K=" + std::to_string(g.k));
+  for (const auto& e : block.elements) image.data[static_cast<std::size_t>(e.id)] = static_cast<float>(e.area_mm2);
+  io::write_nifti(p.area_nifti, image, "authalic element areas (mm^2), " + to_string(g.domain) + " K=" + std::to_string(g.k));
+
+  const std::vector<double> values = block_values(block);
+  ScalarColouring c;
+  c.colormap = "viridis";
+  c.label = units;
+  VectorXd finite(static_cast<Eigen::Index>(values.size()));
+  for (std::size_t i = 0; i < values.size(); ++i) finite(static_cast<Eigen::Index>(i)) = values[i];
+  std::tie(c.vmin, c.vmax) = robust_range(finite);
+  const int cell = std::max(4, 640 / g.cols);
+  io::write_png(p.png, render_element_grid(values, g.rows, g.cols, c,
+                                           cell, "Element values, " + to_string(g.domain) + " K = " + std::to_string(g.k) +
+                                                     " (" + block.hemisphere + ")"));
+
+  // 3D views: each vertex coloured by its element's value, element boundaries drawn.
+  const int nv = static_cast<int>(result.vertex_element.size());
+  c.values = VectorXd::Constant(nv, std::numeric_limits<double>::quiet_NaN());
+  for (int v = 0; v < nv; ++v)
+    if (result.vertex_element(v) >= 0) c.values(v) = values[static_cast<std::size_t>(result.vertex_element(v))];
+  SurfaceRenderOptions so;
+  so.left_hemisphere = left;
+  so.title = "Equal-area elements (" + units + ")";
+  io::write_png(p.png_3d, render_surface_views(V_scanner, F, c, {View::Lateral, View::Medial}, so, &result.vertex_element));
+
+  VectorXi keys = (result.vertex_element.array() + 1).matrix();
+  std::map<int, std::string> names{{0, "none"}};
+  for (const auto& e : block.elements)
+    names[e.id + 1] = "element " + std::to_string(e.id) + " (row " + std::to_string(e.row) + ", col " + std::to_string(e.col) + ")";
+  io::FuncWriteOptions fo;
+  fo.column_names = {"element"};
+  if (block.hemisphere == "left") fo.anatomical_structure = "CortexLeft";
+  if (block.hemisphere == "right") fo.anatomical_structure = "CortexRight";
+  fo.metadata = {{"description", "authalic equal-area element of each vertex: key = element id + 1 (id = row * cols + col), 0 = none"},
+                 {"domain", to_string(g.domain)},
+                 {"k", std::to_string(g.k)},
+                 {"rows", std::to_string(g.rows)},
+                 {"cols", std::to_string(g.cols)}};
+  io::write_label_gifti(p.label, keys, names, fo);
+  return p;
+}
+
+}  // namespace authalic::analysis

@@ -1,0 +1,146 @@
+#pragma once
+// Equal-area cortical elements (Zou et al. 2011, `000_9f60545f35b9287a.txt` section 5.2, Fig. 5):
+// the cells of a regular grid on the parametric domain of an authalic map, mapped back to the
+// cortex. On an authalic map every element holds the same cortical area, so per-element PET
+// values are comparable across elements and subjects.
+//
+// An element's value is the area-weighted mean of the per-vertex value over the part of the
+// cortex that maps into its cell: every triangle is clipped against the cells (core/grid_overlap.h)
+// and each piece contributes (its cortical area) x (the value at its centroid). With values linear
+// on each triangle this is the exact integral, whatever the map's distortion.
+//
+// Element tables (one row per element, one block per hemisphere) are what the normative reference
+// (analysis/normative.h) is built from. On disk: a CSV
+//     id,hemisphere,row,col,area_mm2,centroid_x_mm,centroid_y_mm,centroid_z_mm,value,n_vertices
+// (RAS = scanner RAS of the surface; value in the table's units; NaN written as "nan") and a JSON
+// sidecar next to it (same name, .json instead of .csv) with the grid and the provenance:
+//     {"format": "authalic-element-table", "version": 1, "domain": "square", "k": 32, "rows": 32,
+//      "cols": 32, "hemispheres": ["left"], "normalisation": "global", "units": "...",
+//      "subject_id": "...", "age": 67 | null, "metadata": {...}}
+#include <Eigen/Core>
+
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/mesh.h"
+
+namespace authalic::analysis {
+
+enum class ElementDomain { Square, Rectangle, Sphere };
+std::string to_string(ElementDomain domain);  // "square", "rectangle", "sphere"
+// Parses "square" | "rectangle" | "sphere"; throws InputError naming `what` otherwise.
+ElementDomain parse_element_domain(const std::string& name, const std::string& what = "--domain");
+
+// The element grid of a domain at resolution K: square K x K on [0,1]^2; rectangle 2K x K on
+// [0,2] x [0,1] (whole brain, hemisphere seam at x = 1, i.e. between columns K-1 and K); sphere
+// 2K longitude sectors x K bands equal in z (equal area, Archimedes). Element id = row * cols + col,
+// row 0 at the bottom (y = 0, or z = -1 on the sphere), column 0 at x = 0 (longitude -pi).
+struct ElementGrid {
+  ElementDomain domain = ElementDomain::Square;
+  int k = 32;
+  int rows = 32, cols = 32;
+  int num_elements() const { return rows * cols; }
+};
+ElementGrid element_grid(ElementDomain domain, int k);
+
+struct Element {
+  int id = 0, row = 0, col = 0;
+  double area_mm2 = 0.0;  // cortical area mapped into the cell
+  Eigen::Vector3d centroid = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());  // RAS mm
+  double value = std::numeric_limits<double>::quiet_NaN();  // area-weighted mean; NaN when no valid value
+  int n_vertices = 0;      // surface vertices whose map position falls in the cell
+};
+
+struct ElementBlock {
+  std::string hemisphere;  // "left", "right", "both" (rectangle) or "unknown"
+  std::vector<Element> elements;  // rows * cols, by id
+};
+
+struct ElementTable {
+  ElementGrid grid;
+  std::vector<ElementBlock> blocks;
+  std::string normalisation = "none";  // kind: "none", "global", "reference-region" (analysis/sampling.h)
+  std::string units;                   // of the values
+  std::string subject_id;
+  double age = std::numeric_limits<double>::quiet_NaN();  // years; NaN = unknown
+  std::map<std::string, std::string> metadata;            // provenance (sampling, map file, software, ...)
+  int num_values() const { return static_cast<int>(blocks.size()) * grid.num_elements(); }
+};
+
+// A map ready for element integration: the map's triangles with, for each of its vertices, the
+// 3D position, the domain position and the value.
+struct ElementMap {
+  MatrixXd V3;      // #V' x 3 surface positions (the surface's units, mm)
+  MatrixXd D;       // #V' x 2 (planar, in the domain's coordinates) or #V' x 3 (unit sphere)
+  MatrixXi F;       // the map's triangles
+  VectorXd values;  // #V'
+  int num_surface_vertices = 0;  // the first ones are the surface's
+  int inserted_vertices = 0;     // vertices the flattening appended (traced to the edge they split)
+  std::vector<std::string> notes;
+};
+
+// Puts a surface (V, F: its own triangles), its map (map_V: #V' x 2 or 3, map_F) and per-vertex
+// values together. The map keeps the surface's vertices first, in order; vertices it appended
+// (corner and ear splits of the flattening, core/conformal_map.h) are traced to the surface edge
+// they split and get the interpolated position and value (ear splits: the 3D midpoint, as the
+// flattening places them; corner splits on the boundary: the fraction along the edge read from
+// the map). A planar map in other units (e.g. the mm-scaled flat surface) is rescaled by its
+// bounding box onto the domain when the box has the domain's aspect ratio; a sphere map is
+// projected onto the unit sphere. Throws InputError (naming `map_name`) for a map that does not
+// fit the domain or the surface.
+ElementMap prepare_element_map(const MatrixXd& V, const MatrixXi& F, const MatrixXd& map_V, const MatrixXi& map_F,
+                               const VectorXd& values, ElementDomain domain, const std::string& map_name = "map");
+
+struct ElementResult {
+  ElementBlock block;
+  VectorXi vertex_element;   // per surface vertex: element id, -1 when the vertex is in no map triangle
+  double area_cv = 0.0;      // SD / mean of element areas (population SD, all cells)
+  double total_area_mm2 = 0.0;
+};
+
+// Element values, areas, centroids and vertex counts; `to_scanner` moves the surface's
+// coordinates to scanner RAS for the centroids. Deterministic for any thread count.
+ElementResult compute_elements(const ElementMap& map, const ElementGrid& grid,
+                               const Eigen::Matrix4d& to_scanner = Eigen::Matrix4d::Identity());
+
+// "left", "right" or "unknown" for a surface: GIFTI AnatomicalStructurePrimary (CortexLeft/Right),
+// else the file name (lh.* / rh.*, *left* / *right*, hemi-L / hemi-R).
+std::string hemisphere_of(const std::map<std::string, std::string>& metadata, const std::string& path);
+
+// Element id of a domain point (clamped onto the domain's edges).
+int element_of_point(const ElementGrid& grid, const double* point);
+
+// ---- element tables on disk -------------------------------------------------------------
+
+// "<path without .csv>.json".
+std::string element_sidecar_path(const std::string& csv_path);
+// Writes the CSV and its JSON sidecar (atomically, each).
+void write_element_table(const std::string& csv_path, const ElementTable& table);
+// Reads the CSV and its sidecar; checks ids, rows, columns and grid size against the sidecar.
+// Throws InputError("<path>: <problem>; <hint>") on anything inconsistent.
+ElementTable read_element_table(const std::string& csv_path);
+
+// ---- exported element images ------------------------------------------------------------
+
+struct ElementOutputPaths {
+  std::string csv, sidecar, nifti, area_nifti, png, png_3d, label;
+};
+// Writes, for a one-block table and its result on a surface (V_scanner: RAS mm, F: its faces):
+//   PREFIX.csv + PREFIX.json   the element table (write_element_table)
+//   PREFIX.nii.gz              cols x rows x 1 float image of element values (voxel (col, row));
+//                              the grid is the domain's, not a scanner space: identity affine
+//   PREFIX_area.nii.gz         the same with element areas (mm^2)
+//   PREFIX.png                 the element image with a colour bar and units
+//   PREFIX_3d.png              lateral and medial views coloured by element value, grid drawn
+//   PREFIX.label.gii           per-vertex element as a GIFTI label: key = element id + 1, 0 = none
+// All atomic. `left` picks the lateral side for the 3D views.
+ElementOutputPaths write_element_outputs(const std::string& prefix, const ElementTable& table, const ElementResult& result,
+                                         const MatrixXd& V_scanner, const MatrixXi& F, bool left);
+
+// Element values of one block as a rows x cols image (row 0 at the bottom), e.g. for render.h.
+std::vector<double> block_values(const ElementBlock& block);
+std::vector<double> block_areas(const ElementBlock& block);
+
+}  // namespace authalic::analysis

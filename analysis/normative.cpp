@@ -1,0 +1,591 @@
+// Normative element statistics and patient comparison (see analysis/normative.h).
+#include "analysis/normative.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "analysis/render.h"
+#include "analysis/table_text.h"
+#include "core/error.h"
+#include "core/version.h"
+#include "io/atomic_file.h"
+#include "io/image_io.h"
+#include "io/surface_io.h"
+#include "io/volume_io.h"
+
+namespace authalic::analysis {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? "," : "") + v[i];
+  return s;
+}
+
+std::string software_string() { return std::string("authalic ") + kVersion + " (" + kGitRevision + ")"; }
+
+// The properties two things must share to be pooled or compared.
+struct Shape {
+  ElementGrid grid;
+  std::vector<std::string> hemispheres;
+  std::string normalisation, units;
+};
+
+Shape shape_of(const NormativeReference& r) { return {r.grid, r.hemispheres, r.normalisation, r.units}; }
+Shape shape_of(const ElementTable& t) {
+  Shape s{t.grid, {}, t.normalisation, t.units};
+  for (const auto& b : t.blocks) s.hemispheres.push_back(b.hemisphere);
+  return s;
+}
+
+void check_shapes(const Shape& ref, const Shape& other, const std::string& what, const std::string& ref_name) {
+  auto refuse = [&](const std::string& property, const std::string& a, const std::string& b) {
+    throw InputError(what + ": " + property + " is " + b + " but " + ref_name + " has " + a +
+                     "; element tables and references can only be pooled or compared with the same domain, K, "
+                     "hemispheres, intensity normalisation and units");
+  };
+  if (ref.grid.domain != other.grid.domain) refuse("the domain", to_string(ref.grid.domain), to_string(other.grid.domain));
+  if (ref.grid.k != other.grid.k) refuse("K", std::to_string(ref.grid.k), std::to_string(other.grid.k));
+  if (ref.hemispheres != other.hemispheres) refuse("the hemisphere list", join(ref.hemispheres), join(other.hemispheres));
+  if (ref.normalisation != other.normalisation) refuse("the intensity normalisation", ref.normalisation, other.normalisation);
+  if (ref.units != other.units) refuse("the units", "'" + ref.units + "'", "'" + other.units + "'");
+}
+
+void check_new_subject(const NormativeReference& r, const std::string& id, const std::string& what) {
+  if (id.empty()) return;
+  for (const auto& s : r.subjects)
+    if (s.id == id)
+      throw InputError(what + ": subject '" + id + "' is already in the reference (from " + s.table +
+                       "); every control may be counted once");
+}
+
+nlohmann::json number_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
+
+std::vector<double> read_array(const nlohmann::json& j, const char* key, std::size_t size, const std::string& path) {
+  if (!j.contains(key) || !j[key].is_array())
+    throw InputError(path + ": elements." + key + " is missing; the reference file is incomplete or corrupt");
+  const auto& a = j[key];
+  if (a.size() != size)
+    throw InputError(path + ": elements." + key + " has " + std::to_string(a.size()) + " values, expected " + std::to_string(size));
+  std::vector<double> out(size);
+  for (std::size_t i = 0; i < size; ++i) {
+    if (!a[i].is_number()) throw InputError(path + ": elements." + std::string(key) + "[" + std::to_string(i) + "] is not a number");
+    out[i] = a[i].get<double>();
+  }
+  return out;
+}
+
+}  // namespace
+
+double NormativeReference::sd(int i) const {
+  const double nn = n[static_cast<std::size_t>(i)];
+  return nn >= 2 ? std::sqrt(std::max(0.0, m2[static_cast<std::size_t>(i)]) / (nn - 1)) : kNaN;
+}
+
+NormativeReference empty_reference_like(const ElementTable& table) {
+  NormativeReference r;
+  r.grid = table.grid;
+  for (const auto& b : table.blocks) r.hemispheres.push_back(b.hemisphere);
+  r.normalisation = table.normalisation;
+  r.units = table.units;
+  r.software = software_string();
+  const std::size_t size = static_cast<std::size_t>(r.num_values());
+  r.n.assign(size, 0.0);
+  r.mean.assign(size, 0.0);
+  r.m2.assign(size, 0.0);
+  r.age_model = true;  // until a subject without an age arrives
+  r.age_mean.assign(size, 0.0);
+  r.age_m2.assign(size, 0.0);
+  r.comoment.assign(size, 0.0);
+  return r;
+}
+
+void check_compatible(const NormativeReference& reference, const ElementTable& table, const std::string& what) {
+  check_shapes(shape_of(reference), shape_of(table), what, "the reference");
+}
+
+void add_subject(NormativeReference& r, const ElementTable& table, const std::string& source) {
+  check_compatible(r, table, source);
+  check_new_subject(r, table.subject_id, source);
+  const bool with_age = r.age_model && std::isfinite(table.age);
+  if (r.age_model && !with_age) {
+    r.age_model = false;
+    r.age_mean.clear();
+    r.age_m2.clear();
+    r.comoment.clear();
+  }
+  const int ne = r.grid.num_elements();
+  for (std::size_t b = 0; b < table.blocks.size(); ++b)
+    for (int e = 0; e < ne; ++e) {
+      const double y = table.blocks[b].elements[static_cast<std::size_t>(e)].value;
+      if (!std::isfinite(y)) continue;
+      const std::size_t i = b * static_cast<std::size_t>(ne) + static_cast<std::size_t>(e);
+      // Welford: the running mean and M2; with an age, the running co-moment (uses the old age
+      // deviation and the new value deviation, which makes the update exact).
+      const double n1 = r.n[i] + 1;
+      const double dy = y - r.mean[i];
+      r.mean[i] += dy / n1;
+      r.m2[i] += dy * (y - r.mean[i]);
+      if (with_age) {
+        const double da = table.age - r.age_mean[i];
+        r.age_mean[i] += da / n1;
+        r.age_m2[i] += da * (table.age - r.age_mean[i]);
+        r.comoment[i] += da * (y - r.mean[i]);
+      }
+      r.n[i] = n1;
+    }
+  r.subjects.push_back({table.subject_id, table.age, source});
+}
+
+NormativeReference merge_references(const NormativeReference& a, const NormativeReference& b, const std::string& a_name,
+                                    const std::string& b_name) {
+  check_shapes(shape_of(a), shape_of(b), b_name, a_name);
+  for (const auto& s : b.subjects) check_new_subject(a, s.id, b_name);
+  NormativeReference r = a;
+  r.software = software_string();
+  r.subjects.insert(r.subjects.end(), b.subjects.begin(), b.subjects.end());
+  r.age_model = a.age_model && b.age_model;
+  if (!r.age_model) {
+    r.age_mean.clear();
+    r.age_m2.clear();
+    r.comoment.clear();
+  }
+  const std::size_t size = static_cast<std::size_t>(a.num_values());
+  for (std::size_t i = 0; i < size; ++i) {
+    const double na = a.n[i], nb = b.n[i], n = na + nb;
+    if (nb == 0) continue;
+    if (na == 0) {
+      r.n[i] = nb;
+      r.mean[i] = b.mean[i];
+      r.m2[i] = b.m2[i];
+      if (r.age_model) {
+        r.age_mean[i] = b.age_mean[i];
+        r.age_m2[i] = b.age_m2[i];
+        r.comoment[i] = b.comoment[i];
+      }
+      continue;
+    }
+    const double dy = b.mean[i] - a.mean[i];
+    const double w = na * nb / n;
+    r.n[i] = n;
+    r.mean[i] = a.mean[i] + dy * nb / n;
+    r.m2[i] = a.m2[i] + b.m2[i] + dy * dy * w;
+    if (r.age_model) {
+      const double da = b.age_mean[i] - a.age_mean[i];
+      r.age_mean[i] = a.age_mean[i] + da * nb / n;
+      r.age_m2[i] = a.age_m2[i] + b.age_m2[i] + da * da * w;
+      r.comoment[i] = a.comoment[i] + b.comoment[i] + da * dy * w;
+    }
+  }
+  return r;
+}
+
+NormativeReference build_reference(const std::vector<std::string>& paths, const ProgressFn& progress) {
+  if (paths.empty()) throw InputError("normative build: no element table given");
+  // Parse a small batch of tables in parallel (one table per thread, per-slot results), then add
+  // them in the given order: the result does not depend on the thread count and memory holds at
+  // most one batch.
+  const std::size_t batch = 16;
+  NormativeReference r;
+  bool started = false;
+  std::vector<ElementTable> tables(batch);
+  std::vector<std::string> errors(batch);
+  for (std::size_t first = 0; first < paths.size(); first += batch) {
+    const int count = static_cast<int>(std::min(batch, paths.size() - first));
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int s = 0; s < count; ++s) {
+      errors[static_cast<std::size_t>(s)].clear();
+      try {
+        tables[static_cast<std::size_t>(s)] = read_element_table(paths[first + static_cast<std::size_t>(s)]);
+      } catch (const std::exception& e) {
+        errors[static_cast<std::size_t>(s)] = e.what();
+      }
+    }
+    for (int s = 0; s < count; ++s) {
+      if (!errors[static_cast<std::size_t>(s)].empty()) throw InputError(errors[static_cast<std::size_t>(s)]);
+      const ElementTable& t = tables[static_cast<std::size_t>(s)];
+      if (!started) {
+        r = empty_reference_like(t);
+        started = true;
+      }
+      add_subject(r, t, paths[first + static_cast<std::size_t>(s)]);
+    }
+    report(progress, "reference", static_cast<double>(first + static_cast<std::size_t>(count)) / paths.size(),
+           std::to_string(first + static_cast<std::size_t>(count)) + " of " + std::to_string(paths.size()) + " tables");
+  }
+  return r;
+}
+
+// ---- file --------------------------------------------------------------------------------
+
+std::string reference_to_json(const NormativeReference& r) {
+  nlohmann::json j;
+  j["format"] = "authalic-normative-reference";
+  j["version"] = kNormativeFormatVersion;
+  j["software"] = r.software.empty() ? software_string() : r.software;
+  j["description"] =
+      "Normative reference of equal-area cortical elements (authalic). Per element, over the control "
+      "subjects with a finite value there: n, mean, m2 = sum of squared deviations from the mean (SD = "
+      "sqrt(m2 / (n - 1)), also given as sd); with age_model, age_mean, age_m2 and age_value_comoment = "
+      "sum (age - age_mean)(value - mean), the sufficient statistics of a linear age model. Arrays run over "
+      "the hemisphere blocks in the order listed, then element id = row * cols + col (row 0 at the bottom "
+      "of the domain). References merge exactly (Chan et al. pairwise formulas): authalic normative merge.";
+  j["domain"] = to_string(r.grid.domain);
+  j["k"] = r.grid.k;
+  j["rows"] = r.grid.rows;
+  j["cols"] = r.grid.cols;
+  j["hemispheres"] = r.hemispheres;
+  j["normalisation"] = r.normalisation;
+  j["units"] = r.units;
+  j["num_subjects"] = r.subjects.size();
+  j["age_model"] = r.age_model;
+  j["subjects"] = nlohmann::json::array();
+  for (const auto& s : r.subjects) j["subjects"].push_back({{"id", s.id}, {"age", number_or_null(s.age)}, {"table", s.table}});
+  nlohmann::json e;
+  e["n"] = r.n;
+  e["mean"] = r.mean;
+  e["m2"] = r.m2;
+  if (r.age_model) {
+    e["age_mean"] = r.age_mean;
+    e["age_m2"] = r.age_m2;
+    e["age_value_comoment"] = r.comoment;
+  }
+  nlohmann::json sd = nlohmann::json::array();
+  for (int i = 0; i < r.num_values(); ++i) sd.push_back(number_or_null(r.sd(i)));
+  e["sd"] = sd;
+  j["elements"] = e;
+  return j.dump(1) + "\n";
+}
+
+NormativeReference reference_from_json(const std::string& text, const std::string& path) {
+  NormativeReference r;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(text);
+    if (!j.is_object() || j.value("format", "") != "authalic-normative-reference")
+      throw InputError(path + ": not an authalic normative reference (\"format\" is not \"authalic-normative-reference\")");
+    const int version = j.at("version").get<int>();
+    if (version != kNormativeFormatVersion)
+      throw InputError(path + ": reference format version " + std::to_string(version) + " is not supported (this authalic reads version " +
+                       std::to_string(kNormativeFormatVersion) + "); rebuild the reference with this version");
+    r.grid = element_grid(parse_element_domain(j.at("domain").get<std::string>(), path + ": domain"), j.at("k").get<int>());
+    if (j.at("rows").get<int>() != r.grid.rows || j.at("cols").get<int>() != r.grid.cols)
+      throw InputError(path + ": rows/cols do not match the domain and K");
+    r.hemispheres = j.at("hemispheres").get<std::vector<std::string>>();
+    if (r.hemispheres.empty()) throw InputError(path + ": lists no hemisphere");
+    r.normalisation = j.at("normalisation").get<std::string>();
+    r.units = j.at("units").get<std::string>();
+    r.software = j.value("software", "");
+    for (const auto& s : j.at("subjects")) {
+      NormativeSubject sub;
+      sub.id = s.value("id", "");
+      sub.age = s.contains("age") && s["age"].is_number() ? s["age"].get<double>() : kNaN;
+      sub.table = s.value("table", "");
+      r.subjects.push_back(sub);
+    }
+    if (j.at("num_subjects").get<std::size_t>() != r.subjects.size())
+      throw InputError(path + ": num_subjects does not match the subject list");
+    r.age_model = j.at("age_model").get<bool>();
+    const auto& e = j.at("elements");
+    const std::size_t size = static_cast<std::size_t>(r.num_values());
+    r.n = read_array(e, "n", size, path);
+    r.mean = read_array(e, "mean", size, path);
+    r.m2 = read_array(e, "m2", size, path);
+    if (r.age_model) {
+      r.age_mean = read_array(e, "age_mean", size, path);
+      r.age_m2 = read_array(e, "age_m2", size, path);
+      r.comoment = read_array(e, "age_value_comoment", size, path);
+    }
+    for (std::size_t i = 0; i < size; ++i)
+      if (!(r.n[i] >= 0 && r.n[i] <= static_cast<double>(r.subjects.size()) && r.n[i] == std::floor(r.n[i])) ||
+          !(r.m2[i] >= 0))
+        throw InputError(path + ": element " + std::to_string(i) + " has inconsistent statistics (n " + std::to_string(r.n[i]) +
+                         ", m2 " + std::to_string(r.m2[i]) + "); the file is corrupt");
+  } catch (const nlohmann::json::exception& ex) {
+    throw InputError(path + ": invalid normative reference (" + std::string(ex.what()) + ")");
+  }
+  return r;
+}
+
+void write_reference(const std::string& path, const NormativeReference& reference) {
+  io::write_file_atomically(path, reference_to_json(reference));
+}
+
+NormativeReference read_reference(const std::string& path) {
+  std::string text;
+  if (!read_text_file(path, text)) throw InputError(path + ": cannot read the normative reference");
+  return reference_from_json(text, path);
+}
+
+// ---- comparison --------------------------------------------------------------------------
+
+std::vector<int> label_clusters(const ElementGrid& grid, const std::vector<int>& flags, int* count) {
+  const int rows = grid.rows, cols = grid.cols, ne = grid.num_elements();
+  std::vector<int> label(static_cast<std::size_t>(ne), 0);
+  int next = 0;
+  std::vector<int> stack;
+  for (int start = 0; start < ne; ++start) {
+    if (flags[static_cast<std::size_t>(start)] == 0 || label[static_cast<std::size_t>(start)] != 0) continue;
+    const int sign = flags[static_cast<std::size_t>(start)];
+    label[static_cast<std::size_t>(start)] = ++next;
+    stack.assign(1, start);
+    while (!stack.empty()) {
+      const int e = stack.back();
+      stack.pop_back();
+      const int r = e / cols, c = e % cols;
+      for (int dr = -1; dr <= 1; ++dr)
+        for (int dc = -1; dc <= 1; ++dc) {
+          if (dr == 0 && dc == 0) continue;
+          const int rr = r + dr;
+          int cc = c + dc;
+          if (rr < 0 || rr >= rows) continue;
+          if (grid.domain == ElementDomain::Sphere) {
+            cc = (cc + cols) % cols;  // longitude wraps
+          } else {
+            if (cc < 0 || cc >= cols) continue;
+            // Whole-brain rectangle: the two hemispheres meet at x = 1 only in the map, not in the brain.
+            if (grid.domain == ElementDomain::Rectangle && (c < grid.k) != (cc < grid.k)) continue;
+          }
+          const int n = rr * cols + cc;
+          if (flags[static_cast<std::size_t>(n)] != sign || label[static_cast<std::size_t>(n)] != 0) continue;
+          label[static_cast<std::size_t>(n)] = next;
+          stack.push_back(n);
+        }
+    }
+  }
+  if (count) *count = next;
+  return label;
+}
+
+Comparison compare_to_reference(const NormativeReference& ref, const ElementTable& patient, const CompareOptions& options) {
+  check_compatible(ref, patient, patient.subject_id.empty() ? std::string("patient table") : "patient " + patient.subject_id);
+  if (!(options.threshold > 0)) throw InputError("--threshold: must be > 0 (|z| flagged as abnormal)");
+  Comparison out;
+  out.threshold = options.threshold;
+  out.patient_age = std::isfinite(options.age) ? options.age : patient.age;
+  out.age_adjusted = options.use_age && ref.age_model && std::isfinite(out.patient_age);
+  if (options.use_age && ref.age_model && !std::isfinite(out.patient_age))
+    out.notes.push_back("the reference has an age model but the patient's age is unknown: z-scores are not age-adjusted");
+  for (const auto& s : ref.subjects)
+    if (!patient.subject_id.empty() && s.id == patient.subject_id)
+      out.notes.push_back("subject '" + s.id + "' is one of the reference's controls: its z-scores are biased toward 0");
+  const std::size_t size = static_cast<std::size_t>(ref.num_values());
+  const int ne = ref.grid.num_elements();
+  out.z.assign(size, kNaN);
+  out.expected.assign(size, kNaN);
+  out.sd.assign(size, kNaN);
+  out.flag.assign(size, 0);
+  out.cluster.assign(size, 0);
+  const int min_n = std::max(options.min_subjects, out.age_adjusted ? 3 : 2);
+  for (std::size_t i = 0; i < size; ++i) {
+    const double y = patient.blocks[i / static_cast<std::size_t>(ne)].elements[i % static_cast<std::size_t>(ne)].value;
+    const double n = ref.n[i];
+    if (n < min_n) continue;
+    double expected = ref.mean[i], sd = ref.sd(static_cast<int>(i));
+    if (out.age_adjusted && ref.age_m2[i] > 0) {
+      // Least-squares line in age; SD of the residuals (n - 2 degrees of freedom).
+      const double beta = ref.comoment[i] / ref.age_m2[i];
+      expected = ref.mean[i] + beta * (out.patient_age - ref.age_mean[i]);
+      const double ss = std::max(0.0, ref.m2[i] - ref.comoment[i] * beta);
+      sd = std::sqrt(ss / (n - 2));
+    }
+    out.expected[i] = expected;
+    out.sd[i] = sd;
+    if (!std::isfinite(y) || !(sd > 0)) continue;
+    const double z = (y - expected) / sd;
+    out.z[i] = z;
+    ++out.num_compared;
+    if (z <= -options.threshold) {
+      out.flag[i] = -1;
+      ++out.num_hypo;
+    } else if (z >= options.threshold) {
+      out.flag[i] = 1;
+      ++out.num_hyper;
+    }
+  }
+  out.num_without_z = static_cast<int>(size) - out.num_compared;
+
+  // Clusters per block.
+  for (std::size_t b = 0; b < ref.hemispheres.size(); ++b) {
+    const std::size_t offset = b * static_cast<std::size_t>(ne);
+    std::vector<int> flags(out.flag.begin() + static_cast<std::ptrdiff_t>(offset),
+                           out.flag.begin() + static_cast<std::ptrdiff_t>(offset + static_cast<std::size_t>(ne)));
+    int count = 0;
+    const auto label = label_clusters(ref.grid, flags, &count);
+    std::vector<ElementCluster> clusters(static_cast<std::size_t>(count));
+    for (int e = 0; e < ne; ++e) {
+      const int l = label[static_cast<std::size_t>(e)];
+      if (l == 0) continue;
+      ElementCluster& c = clusters[static_cast<std::size_t>(l - 1)];
+      const Element& el = patient.blocks[b].elements[static_cast<std::size_t>(e)];
+      const double z = out.z[offset + static_cast<std::size_t>(e)];
+      c.block = static_cast<int>(b);
+      c.hemisphere = ref.hemispheres[b];
+      c.sign = flags[static_cast<std::size_t>(e)];
+      c.elements.push_back(e);
+      c.area_mm2 += el.area_mm2;
+      c.mean_z += z;
+      if (c.peak_element < 0 || std::abs(z) > std::abs(c.peak_z)) {
+        c.peak_z = z;
+        c.peak_element = e;
+        c.peak_row = el.row;
+        c.peak_col = el.col;
+        c.peak_ras = el.centroid;
+      }
+    }
+    for (auto& c : clusters) {
+      c.mean_z /= static_cast<double>(c.elements.size());
+      out.clusters.push_back(std::move(c));
+    }
+  }
+  std::stable_sort(out.clusters.begin(), out.clusters.end(), [](const ElementCluster& a, const ElementCluster& b) {
+    if (a.elements.size() != b.elements.size()) return a.elements.size() > b.elements.size();
+    if (std::abs(a.peak_z) != std::abs(b.peak_z)) return std::abs(a.peak_z) > std::abs(b.peak_z);
+    if (a.block != b.block) return a.block < b.block;
+    return a.elements.front() < b.elements.front();
+  });
+  for (std::size_t k = 0; k < out.clusters.size(); ++k) {
+    ElementCluster& c = out.clusters[k];
+    c.id = static_cast<int>(k) + 1;
+    for (int e : c.elements) out.cluster[static_cast<std::size_t>(c.block) * static_cast<std::size_t>(ne) + static_cast<std::size_t>(e)] = c.id;
+  }
+  return out;
+}
+
+}  // namespace authalic::analysis
+
+// ---- outputs --------------------------------------------------------------------------------
+
+namespace authalic::analysis {
+
+std::string comparison_summary_json(const NormativeReference& ref, const std::string& reference_path,
+                                    const ElementTable& patient, const std::string& patient_path, const Comparison& cmp,
+                                    const ComparisonOutputPaths& paths) {
+  nlohmann::json j;
+  j["format"] = "authalic-comparison";
+  j["version"] = 1;
+  j["software"] = software_string();
+  j["z_definition"] = "z = (patient - expected) / SD; hypometabolism is negative (NEUROSTAT/3D-SSP report the opposite sign)";
+  j["reference"] = {{"path", reference_path},
+                    {"num_subjects", ref.subjects.size()},
+                    {"domain", to_string(ref.grid.domain)},
+                    {"k", ref.grid.k},
+                    {"hemispheres", ref.hemispheres},
+                    {"normalisation", ref.normalisation},
+                    {"units", ref.units},
+                    {"age_model", ref.age_model}};
+  j["patient"] = {{"table", patient_path}, {"subject_id", patient.subject_id}, {"age", number_or_null(cmp.patient_age)}};
+  j["age_adjusted"] = cmp.age_adjusted;
+  j["threshold"] = cmp.threshold;
+  j["counts"] = {{"elements", ref.num_values()},
+                 {"compared", cmp.num_compared},
+                 {"without_z", cmp.num_without_z},
+                 {"hypo", cmp.num_hypo},
+                 {"hyper", cmp.num_hyper}};
+  j["clusters"] = nlohmann::json::array();
+  for (const auto& c : cmp.clusters)
+    j["clusters"].push_back({{"id", c.id},
+                             {"hemisphere", c.hemisphere},
+                             {"sign", c.sign < 0 ? "hypo" : "hyper"},
+                             {"num_elements", c.elements.size()},
+                             {"area_mm2", c.area_mm2},
+                             {"peak_z", c.peak_z},
+                             {"mean_z", c.mean_z},
+                             {"peak_element", c.peak_element},
+                             {"peak_row", c.peak_row},
+                             {"peak_col", c.peak_col},
+                             {"peak_ras_mm", {number_or_null(c.peak_ras.x()), number_or_null(c.peak_ras.y()), number_or_null(c.peak_ras.z())}}});
+  j["notes"] = cmp.notes;
+  j["outputs"] = {{"z_nifti", paths.z_nifti}, {"z_png", paths.z_png}, {"abnormal_csv", paths.abnormal_csv},
+                  {"summary_json", paths.summary_json}, {"z_func", paths.z_func}};
+  return j.dump(2) + "\n";
+}
+
+ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const NormativeReference& ref,
+                                               const std::string& reference_path, const ElementTable& patient,
+                                               const std::string& patient_path, const Comparison& cmp,
+                                               const std::vector<VectorXi>& vertex_elements) {
+  ComparisonOutputPaths p;
+  p.z_nifti = prefix + "_z.nii.gz";
+  p.z_png = prefix + "_z.png";
+  p.abnormal_csv = prefix + "_abnormal.csv";
+  p.summary_json = prefix + ".json";
+  const ElementGrid& g = ref.grid;
+  const int ne = g.num_elements();
+  const int nb = static_cast<int>(ref.hemispheres.size());
+
+  io::Volume image;
+  image.dims = {g.cols, g.rows, nb};
+  image.vox2ras = Eigen::Matrix4d::Identity();
+  image.data.resize(cmp.z.size());
+  for (std::size_t i = 0; i < cmp.z.size(); ++i) image.data[i] = static_cast<float>(cmp.z[i]);
+  io::write_nifti(p.z_nifti, image, "authalic z = (patient - expected)/SD, " + to_string(g.domain) + " K=" + std::to_string(g.k));
+
+  ScalarColouring c;
+  c.colormap = "coolwarm";
+  c.vmin = -5;
+  c.vmax = 5;
+  c.label = "z";
+  const int cell = std::max(4, 480 / g.cols);
+  std::vector<io::RgbImage> panels;
+  std::vector<std::string> captions;
+  for (int b = 0; b < nb; ++b) {
+    std::vector<double> z(cmp.z.begin() + static_cast<std::ptrdiff_t>(b) * ne, cmp.z.begin() + static_cast<std::ptrdiff_t>(b + 1) * ne);
+    panels.push_back(render_element_grid(z, g.rows, g.cols, c, cell, "z-score elements (" + ref.hemispheres[static_cast<std::size_t>(b)] + ")"));
+    captions.push_back(ref.hemispheres[static_cast<std::size_t>(b)]);
+  }
+  io::write_png(p.z_png, nb == 1 ? panels[0] : compose_horizontal(panels, 16, captions));
+
+  for (int b = 0; b < nb && b < static_cast<int>(vertex_elements.size()); ++b) {
+    const VectorXi& ve = vertex_elements[static_cast<std::size_t>(b)];
+    if (ve.size() == 0) continue;
+    VectorXd zv = VectorXd::Constant(ve.size(), kNaN);
+    for (Eigen::Index v = 0; v < ve.size(); ++v)
+      if (ve(v) >= 0 && ve(v) < ne) zv(v) = cmp.z[static_cast<std::size_t>(b) * static_cast<std::size_t>(ne) + static_cast<std::size_t>(ve(v))];
+    const std::string& hemi = ref.hemispheres[static_cast<std::size_t>(b)];
+    const std::string path = nb == 1 ? prefix + "_z.func.gii" : prefix + "_" + hemi + "_z.func.gii";
+    io::FuncWriteOptions fo;
+    fo.column_names = {"z"};
+    if (hemi == "left") fo.anatomical_structure = "CortexLeft";
+    if (hemi == "right") fo.anatomical_structure = "CortexRight";
+    fo.metadata = {{"description", "z = (patient - expected) / SD of the vertex's equal-area element"},
+                   {"reference", reference_path},
+                   {"normalisation", ref.normalisation},
+                   {"software", software_string()}};
+    io::write_per_vertex(path, zv, fo);
+    p.z_func.push_back(path);
+  }
+
+  std::string csv = "hemisphere,id,row,col,value,expected,sd,z,direction,cluster,area_mm2,centroid_x_mm,centroid_y_mm,centroid_z_mm\n";
+  for (int b = 0; b < nb; ++b)
+    for (int e = 0; e < ne; ++e) {
+      const std::size_t i = static_cast<std::size_t>(b) * static_cast<std::size_t>(ne) + static_cast<std::size_t>(e);
+      if (cmp.flag[i] == 0) continue;
+      const Element& el = patient.blocks[static_cast<std::size_t>(b)].elements[static_cast<std::size_t>(e)];
+      csv += ref.hemispheres[static_cast<std::size_t>(b)] + "," + std::to_string(e) + "," + std::to_string(el.row) + "," +
+             std::to_string(el.col);
+      for (double x : {el.value, cmp.expected[i], cmp.sd[i], cmp.z[i]}) {
+        csv += ',';
+        append_number(csv, x);
+      }
+      csv += cmp.flag[i] < 0 ? ",hypo," : ",hyper,";
+      csv += std::to_string(cmp.cluster[i]);
+      for (double x : {el.area_mm2, el.centroid.x(), el.centroid.y(), el.centroid.z()}) {
+        csv += ',';
+        append_number(csv, x);
+      }
+      csv += '\n';
+    }
+  io::write_file_atomically(p.abnormal_csv, csv);
+  io::write_file_atomically(p.summary_json, comparison_summary_json(ref, reference_path, patient, patient_path, cmp, p));
+  return p;
+}
+
+}  // namespace authalic::analysis

@@ -1,0 +1,161 @@
+#pragma once
+// Normative reference of equal-area cortical elements from control subjects, and the comparison of
+// a patient with it (Zou et al. 2011, `000_9f60545f35b9287a.txt` section 5.2, last paragraph:
+// "once normative brain patterns for each element are derived from a group of control subjects,
+// whether a particular cortical element derived from a patient falls into the abnormal can be
+// subsequently determined according to the comparison against the normative reference"; the
+// element-wise z-score of NEUROSTAT/3D-SSP).
+//
+// Statistics. Per element, over the controls whose value there is finite: n, mean and M2 (sum of
+// squared deviations) by Welford's online update, so a reference is built streaming, one table
+// at a time, in memory independent of the number of subjects. When every control has an age, the
+// age's mean and M2 and the co-moment C = sum (a - mean_a)(y - mean_y) are kept as well: the
+// sufficient statistics of the least-squares line y = mean_y + beta (a - mean_a), beta = C / M2_a,
+// residual variance (M2_y - C^2 / M2_a) / (n - 2). Two references merge exactly with Chan, Golub &
+// LeVeque's pairwise formulas (delta = mean_B - mean_A, n = n_A + n_B):
+//     mean = mean_A + delta n_B / n,   M2 = M2_A + M2_B + delta^2 n_A n_B / n,
+//     C = C_A + C_B + delta_a delta_y n_A n_B / n,
+// so references built on separate machines and merged equal the reference of all their subjects
+// up to floating-point reassociation.
+//
+// Sign convention. z = (patient - expected) / SD, so hypometabolism gives negative z and an
+// element is flagged abnormal at z <= -threshold (hypo) or z >= +threshold (hyper). NEUROSTAT/3D-SSP
+// report the opposite sign, (normal mean - patient) / SD, as a positive "decrease" z; negate ours
+// to compare with them.
+//
+// File format (JSON, versioned; see reference_to_json for every field):
+//   {"format": "authalic-normative-reference", "version": 1, "software": "authalic 0.1.0 (rev)",
+//    "domain": "square", "k": 32, "rows": 32, "cols": 32, "hemispheres": ["left", "right"],
+//    "normalisation": "global", "units": "...", "num_subjects": N, "age_model": true,
+//    "subjects": [{"id": "...", "age": 61.0 | null, "table": "path"}],
+//    "elements": {"n": [...], "mean": [...], "m2": [...], "age_mean": [...], "age_m2": [...],
+//                 "age_value_comoment": [...], "sd": [...]}}
+// Arrays run over hemisphere blocks in the listed order, then element id (row * cols + col);
+// "sd" is derived (sqrt(m2 / (n - 1))) for readers, and ignored when reading.
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "analysis/elements.h"
+#include "core/progress.h"
+
+namespace authalic::analysis {
+
+inline constexpr int kNormativeFormatVersion = 1;
+
+struct NormativeSubject {
+  std::string id;
+  double age = std::numeric_limits<double>::quiet_NaN();
+  std::string table;  // the element table it came from
+};
+
+struct NormativeReference {
+  ElementGrid grid;
+  std::vector<std::string> hemispheres;  // blocks, in order
+  std::string normalisation = "none";
+  std::string units;
+  std::string software;                  // of the program that wrote it
+  std::vector<NormativeSubject> subjects;
+  bool age_model = false;                // age statistics kept (every subject has an age)
+  // Per element (hemispheres.size() * grid.num_elements()):
+  std::vector<double> n, mean, m2;       // n stored as double (exact below 2^53)
+  std::vector<double> age_mean, age_m2, comoment;  // empty when !age_model
+  int num_values() const { return static_cast<int>(hemispheres.size()) * grid.num_elements(); }
+  // Sample SD of element i (NaN for n < 2).
+  double sd(int i) const;
+};
+
+// An empty reference shaped like `table` (grid, hemispheres, normalisation, units).
+NormativeReference empty_reference_like(const ElementTable& table);
+// Throws InputError("<what>: <which property> differs: ... ; <hint>") when the table cannot be
+// pooled with / compared against the reference (domain, K, hemispheres, normalisation, units).
+void check_compatible(const NormativeReference& reference, const ElementTable& table, const std::string& what);
+// Welford update with one control's table (must be compatible; a subject id already in the
+// reference is refused).
+void add_subject(NormativeReference& reference, const ElementTable& table, const std::string& source);
+// Chan et al. pairwise merge; refuses incompatible references and subjects present in both.
+NormativeReference merge_references(const NormativeReference& a, const NormativeReference& b,
+                                    const std::string& a_name = "first reference",
+                                    const std::string& b_name = "second reference");
+
+// Streams the tables (parsed in parallel in small batches, added in the given order) into a
+// reference. Throws InputError naming the first bad or incompatible table.
+NormativeReference build_reference(const std::vector<std::string>& table_paths, const ProgressFn& progress = {});
+
+std::string reference_to_json(const NormativeReference& reference);
+NormativeReference reference_from_json(const std::string& text, const std::string& path);
+void write_reference(const std::string& path, const NormativeReference& reference);  // atomic
+NormativeReference read_reference(const std::string& path);
+
+// ---- comparison of a patient ------------------------------------------------------------
+
+struct CompareOptions {
+  double threshold = 2.0;        // |z| at or beyond which an element is abnormal
+  bool use_age = true;           // use the age model when the reference has one and the age is known
+  double age = std::numeric_limits<double>::quiet_NaN();  // patient's age (years); NaN = from the table
+  int min_subjects = 3;          // elements with fewer controls get no z
+};
+
+struct ElementCluster {
+  int id = 0;                    // 1-based, in the order below
+  int block = 0;
+  std::string hemisphere;
+  int sign = -1;                 // -1 hypo (z <= -threshold), +1 hyper
+  std::vector<int> elements;     // element ids within the block, ascending
+  double area_mm2 = 0.0;         // patient's cortical area of the elements
+  double peak_z = 0.0;           // most extreme z
+  double mean_z = 0.0;
+  int peak_element = -1, peak_row = -1, peak_col = -1;
+  Eigen::Vector3d peak_ras = Eigen::Vector3d::Zero();  // centroid of the peak element, scanner RAS mm
+};
+
+struct Comparison {
+  // Per value (blocks x elements, as NormativeReference):
+  std::vector<double> z, expected, sd;
+  std::vector<int> flag;         // -1 hypo, +1 hyper, 0 normal or no z
+  std::vector<int> cluster;      // cluster id, 0 = none
+  std::vector<ElementCluster> clusters;  // by size (elements) descending, then |peak z|, then position
+  bool age_adjusted = false;
+  double patient_age = std::numeric_limits<double>::quiet_NaN();
+  int num_compared = 0, num_hypo = 0, num_hyper = 0, num_without_z = 0;
+  double threshold = 2.0;
+  std::vector<std::string> notes;
+};
+
+// z-scores, flags and clusters. Clusters join abnormal elements of the same sign that touch
+// (8-neighbourhood): on the rectangle not across the hemisphere seam (between columns K-1 and K);
+// on the sphere wrapping in longitude (column cols-1 touches column 0); never across blocks.
+Comparison compare_to_reference(const NormativeReference& reference, const ElementTable& patient,
+                                const CompareOptions& options = {});
+
+// ---- outputs of a comparison -------------------------------------------------------------
+
+struct ComparisonOutputPaths {
+  std::string z_nifti, z_png, abnormal_csv, summary_json;
+  std::vector<std::string> z_func;  // one per block given vertex elements
+};
+// Writes:
+//   PREFIX_z.nii.gz        cols x rows x blocks float image of z (NaN where no z)
+//   PREFIX_z.png           the z elements per block, diverging colour map over [-5, 5], colour bar
+//   PREFIX_z.func.gii      per-vertex z (the z of the vertex's element; NaN outside), for each block
+//                          whose vertex_elements entry is non-empty; with several blocks
+//                          PREFIX_<hemisphere>_z.func.gii
+//   PREFIX_abnormal.csv    one row per abnormal element: hemisphere,id,row,col,value,expected,sd,z,
+//                          direction,cluster,area_mm2,centroid_x_mm,centroid_y_mm,centroid_z_mm
+//   PREFIX.json            summary: reference, patient, threshold, counts, clusters, outputs
+// vertex_elements[b](v) = element id of vertex v in block b (-1 none), e.g. from the element label
+// file (key - 1) or ElementResult::vertex_element.
+ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const NormativeReference& reference,
+                                               const std::string& reference_path, const ElementTable& patient,
+                                               const std::string& patient_path, const Comparison& comparison,
+                                               const std::vector<VectorXi>& vertex_elements);
+// The summary JSON document written above (also printed by --json).
+std::string comparison_summary_json(const NormativeReference& reference, const std::string& reference_path,
+                                    const ElementTable& patient, const std::string& patient_path,
+                                    const Comparison& comparison, const ComparisonOutputPaths& paths);
+
+// Cluster labelling on one block's grid (exposed for tests): flags per element (-1/0/+1) ->
+// cluster index per element (0 = none, 1..m), the number of clusters in *count.
+std::vector<int> label_clusters(const ElementGrid& grid, const std::vector<int>& flags, int* count);
+
+}  // namespace authalic::analysis

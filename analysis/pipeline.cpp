@@ -1,0 +1,444 @@
+#include "analysis/pipeline.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "analysis/elements.h"
+#include "analysis/normative.h"
+#include "analysis/render.h"
+#include "analysis/report.h"
+#include "analysis/sampling.h"
+#include "core/authalic_flow.h"
+#include "core/conformal_map.h"
+#include "core/error.h"
+#include "core/metrics.h"
+#include "core/version.h"
+#include "io/atomic_file.h"
+#include "io/checksum.h"
+#include "io/image_io.h"
+#include "io/surface_io.h"
+#include "io/volume_io.h"
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace authalic::analysis {
+
+namespace {
+
+std::string software() { return std::string("authalic ") + kVersion + " (" + kGitRevision + ")"; }
+
+// Per-step wall times for the log (never written into the data files: outputs stay identical).
+class StepLog {
+ public:
+  explicit StepLog(const ProgressFn& progress) : progress_(progress) {}
+  void begin(const std::string& name) {
+    name_ = name;
+    start_ = std::chrono::steady_clock::now();
+    report(progress_, "run", -1, name + " ...");
+  }
+  void end(RunSummary& summary) {
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    summary.step_seconds.emplace_back(name_, s);
+    std::ostringstream line;
+    line << std::left << std::setw(34) << name_ << std::right << std::fixed << std::setprecision(3) << s << " s";
+    lines_.push_back(line.str());
+    for (const auto& n : notes_) lines_.push_back("  " + n);
+    notes_.clear();
+    report(progress_, "run", -1, name_ + " done");
+  }
+  // A remark about the current step, printed under its timing line.
+  void note(const std::string& line) { notes_.push_back(line); }
+  std::string text() const {
+    std::string t;
+    for (const auto& l : lines_) t += l + "\n";
+    return t;
+  }
+
+ private:
+  ProgressFn progress_;
+  std::string name_;
+  std::chrono::steady_clock::time_point start_;
+  std::vector<std::string> lines_, notes_;
+};
+
+struct Hemisphere {
+  std::string name, tag;  // "left"/"L"
+  bool left = true;
+  io::Surface white, pial;
+  std::vector<int> cortex;      // region vertices
+  MatrixXi cortex_faces;        // faces of the white surface inside the cortex region
+  // map
+  MatrixXd flat_V;              // #V' x 3 positions of the map's vertices on the surface (mm)
+  MatrixXd uv;                  // #V' x 2 in [0,1]^2
+  MatrixXi flat_F;
+  FlowReport flow;
+  MapMetrics metrics;
+  // PET
+  SamplingResult sampling;
+  VectorXd pet;                 // per surface vertex (normalised)
+  ElementResult elements;
+};
+
+void check_id(const std::string& id) {
+  if (id.empty()) throw InputError("--id: empty subject id; give a label such as 01 or patient01");
+  for (char c : id)
+    if (!std::isalnum(static_cast<unsigned char>(c)))
+      throw InputError("--id '" + id + "': BIDS labels are letters and digits only; e.g. 'patient01'");
+}
+
+void load_hemisphere(Hemisphere& h, const std::string& white, const std::string& pial, const std::string& cortex) {
+  h.white = io::read_surface(white);
+  h.pial = io::read_surface(pial);
+  const int n = h.white.mesh.num_vertices();
+  if (h.pial.mesh.num_vertices() != n)
+    throw InputError(pial + ": has " + std::to_string(h.pial.mesh.num_vertices()) + " vertices but " + white + " has " +
+                     std::to_string(n) + "; white and pial must come from the same subject and hemisphere");
+  h.cortex = io::read_region_vertices(cortex, n);
+  std::vector<bool> in(n, false);
+  for (int v : h.cortex) in[v] = true;
+  std::vector<Eigen::Vector3i> faces;
+  const MatrixXi& F = h.white.mesh.F;
+  for (int f = 0; f < F.rows(); ++f)
+    if (in[F(f, 0)] && in[F(f, 1)] && in[F(f, 2)]) faces.emplace_back(F(f, 0), F(f, 1), F(f, 2));
+  h.cortex_faces.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (std::size_t f = 0; f < faces.size(); ++f) h.cortex_faces.row(static_cast<Eigen::Index>(f)) = faces[f].transpose();
+  const TopologyReport t = analyze_topology(h.white.mesh.V, h.cortex_faces);
+  if (!t.is_disk())
+    throw InputError(cortex + ": the cortex region on " + white + " is not one disk (" + t.summary() +
+                     "); the map needs a region with one boundary loop, e.g. FreeSurfer's ?h.cortex.label");
+}
+
+}  // namespace
+
+SubjectInputs inputs_from_subjects_dir(const std::string& subjects_dir, const std::string& subject) {
+  const fs::path base = fs::path(subjects_dir) / subject;
+  if (!fs::is_directory(base))
+    throw InputError(base.string() + ": no such FreeSurfer subject folder; check --subjects-dir and --subject");
+  SubjectInputs in;
+  in.id = subject;
+  auto need = [&](const std::string& rel) {
+    const fs::path p = base / rel;
+    if (!fs::exists(p)) throw InputError(p.string() + ": missing from the FreeSurfer subject folder; was recon-all run to the end?");
+    return p.string();
+  };
+  in.lh_white = need("surf/lh.white");
+  in.lh_pial = need("surf/lh.pial");
+  in.rh_white = need("surf/rh.white");
+  in.rh_pial = need("surf/rh.pial");
+  in.lh_cortex = need("label/lh.cortex.label");
+  in.rh_cortex = need("label/rh.cortex.label");
+  // BIDS labels are alphanumeric: FreeSurfer subject names often are not (bert_01).
+  std::string id;
+  for (char c : subject)
+    if (std::isalnum(static_cast<unsigned char>(c))) id += c;
+  in.id = id;
+  return in;
+}
+
+namespace {
+
+// One hemisphere's cortex onto the unit square: conformal start, then the authalic flow.
+// (The anatomical orientation rule and the mirroring of the right hemisphere live in the map.)
+void map_hemisphere(Hemisphere& h, const ProgressFn& progress) {
+  RectangleBoundaryMap boundary;
+  ConformalMapResult c = conformal_rectangle_map(h.white.mesh.V, h.cortex_faces, boundary);
+  FlowOptions fo;
+  FlowResult r = authalic_flow(c.V, c.F, c.UV, c.side_mask, fo, progress);
+  h.flat_V = c.V;
+  h.flat_F = c.F;
+  h.uv = r.UV;
+  h.flow = r.report;
+}
+
+// The element image of one block as a K x K NIfTI (voxel (col, row)); the affine is a plain
+// index grid: element images live in the map's domain, not in scanner space.
+io::Volume element_volume(const ElementBlock& block, const ElementGrid& grid, bool areas, const std::string& source) {
+  io::Volume v;
+  v.dims = {grid.cols, grid.rows, 1};
+  v.data.resize(static_cast<std::size_t>(grid.num_elements()));
+  for (const Element& e : block.elements)
+    v.data[static_cast<std::size_t>(e.row) * grid.cols + e.col] = static_cast<float>(areas ? e.area_mm2 : e.value);
+  v.vox2ras = Eigen::Matrix4d::Identity();
+  v.orientation_source = "element grid";
+  v.source_path = source;
+  return v;
+}
+
+json input_checksums(const SubjectInputs& in) {
+  json j;
+  for (const auto& [key, path] : std::vector<std::pair<std::string, std::string>>{
+           {"lh_white", in.lh_white}, {"lh_pial", in.lh_pial}, {"rh_white", in.rh_white}, {"rh_pial", in.rh_pial},
+           {"lh_cortex", in.lh_cortex}, {"rh_cortex", in.rh_cortex}, {"pet", in.pet}, {"normative", in.normative}}) {
+    if (path.empty()) continue;
+    j[key] = {{"path", fs::path(path).filename().string()},
+              {"sha256", fs::is_directory(path) ? std::string("(folder)") : io::sha256_file(path)}};
+  }
+  return j;
+}
+
+}  // namespace
+
+RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const ProgressFn& progress) {
+  check_id(in.id);
+  if (options.out_dir.empty()) throw InputError("--out: no output folder given");
+  const fs::path final_dir = fs::path(options.out_dir) / ("sub-" + in.id);
+  if (fs::exists(final_dir) && !options.force)
+    throw InputError(final_dir.string() + ": output folder exists; pass --force to replace it or choose another --out");
+
+  RunSummary summary;
+  StepLog log(progress);
+  const std::string prefix = "sub-" + in.id;
+
+  // 1. Inputs: everything is read and checked before anything is written.
+  log.begin("load and check inputs");
+  Hemisphere hemis[2];
+  hemis[0].name = "left";
+  hemis[0].tag = "L";
+  hemis[1].name = "right";
+  hemis[1].tag = "R";
+  hemis[1].left = false;
+  load_hemisphere(hemis[0], in.lh_white, in.lh_pial, in.lh_cortex);
+  load_hemisphere(hemis[1], in.rh_white, in.rh_pial, in.rh_cortex);
+  const io::Volume pet = io::read_volume(in.pet);
+  NormativeReference reference;
+  const bool compare = !in.normative.empty();
+  if (compare) reference = read_reference(in.normative);
+  std::unique_ptr<io::Volume> mask;
+  if (options.normalize != "none" && options.normalize != "global") mask = std::make_unique<io::Volume>(io::read_volume(options.normalize));
+  const json checksums = input_checksums(in);
+  log.end(summary);
+
+  // 2. Authalic square map per hemisphere.
+  for (Hemisphere& h : hemis) {
+    log.begin("authalic square map (" + h.name + ")");
+    map_hemisphere(h, progress);
+    h.metrics = map_metrics(h.flat_V, h.uv, h.flat_F, MapDomain::Square, options.k);
+    log.note("flips " + std::to_string(h.metrics.flips) + ", element-area CV " + std::to_string(h.metrics.element_cv) +
+             ", flow " + h.flow.stop_reason);
+    log.end(summary);
+  }
+
+  // 3. PET by normal projection from the pial surface inward (Zou et al. 2011, section 5.2).
+  log.begin("PET sampling");
+  SamplingOptions so;
+  so.depth_mm = options.depth_mm;
+  for (Hemisphere& h : hemis) {
+    const MatrixXd Vw = transform_points(h.pial.to_scanner, h.pial.mesh.V);
+    h.sampling = sample_normal_projection(pet, Vw, h.pial.mesh.F, so);
+    h.pet = h.sampling.values;
+  }
+  Normalisation norm;
+  if (options.normalize == "global") {
+    // Both hemispheres' cortex together: one global mean for the subject.
+    const int nl = hemis[0].white.mesh.num_vertices();
+    MatrixXd V(nl + hemis[1].white.mesh.num_vertices(), 3);
+    V << hemis[0].white.mesh.V, hemis[1].white.mesh.V;
+    MatrixXi F(hemis[0].cortex_faces.rows() + hemis[1].cortex_faces.rows(), 3);
+    F << hemis[0].cortex_faces, (hemis[1].cortex_faces.array() + nl).matrix();
+    VectorXd values(V.rows());
+    values << hemis[0].pet, hemis[1].pet;
+    norm = global_cortical_mean(values, V, F);
+  } else if (mask) {
+    norm = reference_region_mean(pet, *mask);
+  }
+  for (Hemisphere& h : hemis) apply_normalisation(h.pet, norm);
+  log.note(hemis[0].sampling.method + "; normalisation: " + (norm.description.empty() ? "none" : norm.description));
+  log.end(summary);
+
+  // 4. Equal-area elements.
+  log.begin("equal-area elements");
+  ElementTable table;
+  table.grid = element_grid(ElementDomain::Square, options.k);
+  table.normalisation = to_string(norm.kind);
+  table.units = norm.units.empty() ? pet.units : norm.units;
+  table.subject_id = in.id;
+  table.age = in.age > 0 ? in.age : std::numeric_limits<double>::quiet_NaN();
+  table.metadata["software"] = software();
+  table.metadata["sampling"] = hemis[0].sampling.method;
+  for (Hemisphere& h : hemis) {
+    const ElementMap m = prepare_element_map(h.white.mesh.V, h.cortex_faces, h.uv, h.flat_F, h.pet, ElementDomain::Square,
+                                             h.name + " square map");
+    h.elements = compute_elements(m, table.grid, h.white.to_scanner);
+    h.elements.block.hemisphere = h.name;
+    table.blocks.push_back(h.elements.block);
+  }
+  log.end(summary);
+
+  // 5. Comparison with the normative reference.
+  Comparison cmp;
+  if (compare) {
+    log.begin("normative comparison");
+    CompareOptions co;
+    co.threshold = options.z_threshold;
+    cmp = compare_to_reference(reference, table, co);
+    summary.abnormal_elements = cmp.num_hypo + cmp.num_hyper;
+    summary.clusters = static_cast<int>(cmp.clusters.size());
+    log.end(summary);
+  }
+
+  // 6. Outputs, staged in a hidden folder and renamed into place at the end.
+  log.begin("write outputs");
+  fs::create_directories(options.out_dir);
+  const fs::path stage = fs::path(options.out_dir) / (".sub-" + in.id + ".partial-" + std::to_string(::getpid()));
+  fs::remove_all(stage);
+  fs::create_directories(stage);
+  json params = {{"k", options.k},
+                 {"depth_mm", options.depth_mm},
+                 {"sampling", hemis[0].sampling.method},
+                 {"normalisation", norm.description.empty() ? "none" : norm.description},
+                 {"z_threshold", options.z_threshold}};
+  // One JSON sidecar per BIDS base name (x.nii.gz and x.png share x.json, which lists both).
+  std::map<std::string, json> sidecars;
+  auto sidecar = [&](const std::string& file, const json& extra) {
+    const std::string base = file.substr(0, file.find('.'));
+    json& j = sidecars[base];
+    if (j.is_null()) j = {{"software", software()}, {"parameters", params}, {"inputs", checksums}};
+    j["files"].push_back(file);
+    j.update(extra);
+    summary.files.push_back(file);
+  };
+  const int K = options.k;
+  for (Hemisphere& h : hemis) {
+    const std::string hp = prefix + "_hemi-" + h.tag;
+    // Flat map scaled so 1 mm^2 flat = 1 mm^2 cortex (on average).
+    const double area = face_areas(h.flat_V, h.flat_F).sum();
+    TriMesh flat;
+    flat.V = MatrixXd::Zero(h.uv.rows(), 3);
+    flat.V.leftCols(2) = h.uv * std::sqrt(area);
+    flat.F = h.flat_F;
+    io::SurfaceWriteOptions wo;
+    wo.anatomical_structure = h.left ? "CortexLeft" : "CortexRight";
+    wo.geometric_type = "Flat";
+    wo.metadata = {{"units", "mm"}, {"space", "authalic square map scaled to cortical area (mm^2 flat = mm^2 cortex)"}};
+    const std::string flat_name = hp + "_space-authalic_flat.surf.gii";
+    io::write_surface((stage / flat_name).string(), flat, wo);
+    sidecar(flat_name, {{"description", "authalic flat map; square side sqrt(cortical area) mm"},
+                        {"metrics", {{"flips", h.metrics.flips}, {"element_area_cv", h.metrics.element_cv}}}});
+    io::FuncWriteOptions fo;
+    fo.column_names = {"pet"};
+    fo.anatomical_structure = wo.anatomical_structure;
+    fo.metadata = {{"normalisation", table.normalisation}, {"units", table.units}, {"sampling", h.sampling.method}};
+    const std::string pet_name = hp + "_desc-pet.func.gii";
+    io::write_per_vertex((stage / pet_name).string(), h.pet, fo);
+    sidecar(pet_name, {{"description", "PET per vertex (normal projection), normalised"}, {"units", table.units}});
+    const std::string img_name = hp + "_desc-pet_elements.nii.gz";
+    io::write_nifti((stage / img_name).string(), element_volume(h.elements.block, table.grid, false, in.pet),
+                    "authalic PET elements " + h.name);
+    sidecar(img_name, {{"description", "element PET values, K x K (i = column, j = row from the bottom)"}, {"units", table.units}});
+    ScalarColouring c;
+    const auto range = robust_range(h.pet);
+    c.vmin = range.first;
+    c.vmax = range.second;
+    c.label = table.units;
+    const std::string png_name = hp + "_desc-pet_elements.png";
+    io::write_png((stage / png_name).string(),
+                  render_element_grid(block_values(h.elements.block), K, K, c, 12, h.name + " PET elements"));
+    sidecar(png_name, {{"description", "element PET values"}});
+  }
+  const std::string table_name = prefix + "_elements.csv";
+  write_element_table((stage / table_name).string(), table);
+  summary.files.push_back(table_name);
+  if (compare) {
+    for (int b = 0; b < 2; ++b) {
+      const std::string hp = prefix + "_hemi-" + hemis[b].tag;
+      std::vector<double> z(cmp.z.begin() + b * table.grid.num_elements(), cmp.z.begin() + (b + 1) * table.grid.num_elements());
+      ElementBlock zb = hemis[b].elements.block;
+      for (std::size_t i = 0; i < zb.elements.size(); ++i) zb.elements[i].value = z[i];
+      const std::string zimg = hp + "_desc-z_elements.nii.gz";
+      io::write_nifti((stage / zimg).string(), element_volume(zb, table.grid, false, in.normative), "authalic z " + hemis[b].name);
+      sidecar(zimg, {{"description", "element z-scores, z = (patient - reference mean) / reference SD"}});
+      ScalarColouring zc;
+      zc.colormap = "coolwarm";
+      zc.vmin = -4;
+      zc.vmax = 4;
+      zc.label = "z";
+      const std::string zpng = hp + "_desc-z_elements.png";
+      io::write_png((stage / zpng).string(), render_element_grid(z, K, K, zc, 12, hemis[b].name + " z-scores"));
+      sidecar(zpng, {{"description", "element z-scores"}});
+    }
+  }
+
+  if (options.report) {
+    ReportData rd;
+    rd.subject_id = in.id;
+    rd.software = software();
+    rd.pet_units = table.units;
+    rd.subject_info = {{"PET", fs::path(in.pet).filename().string()}, {"age", in.age > 0 ? std::to_string(in.age) : "unknown"}};
+    for (const auto& [k, v] : params.items()) rd.parameters.emplace_back(k, v.is_string() ? v.get<std::string>() : v.dump());
+    for (int b = 0; b < 2; ++b) {
+      Hemisphere& h = hemis[b];
+      ReportHemisphere rh;
+      rh.name = h.name;
+      rh.left = h.left;
+      rh.flat_uv = h.uv;
+      rh.faces = h.flat_F;
+      rh.grid_cols = rh.grid_rows = K;
+      rh.surface_V = h.pial.mesh.V;
+      rh.surface_F = h.pial.mesh.F;
+      rh.element_of_vertex = h.elements.vertex_element;
+      rh.pet = h.pet.head(h.white.mesh.num_vertices());
+      rh.element_pet = block_values(h.elements.block);
+      if (compare) rh.element_z.assign(cmp.z.begin() + b * table.grid.num_elements(), cmp.z.begin() + (b + 1) * table.grid.num_elements());
+      rh.distortion = {{"flipped triangles", std::to_string(h.metrics.flips)},
+                       {"element-area CV (K=" + std::to_string(K) + ")", std::to_string(h.metrics.element_cv)},
+                       {"per-face mean |ln area ratio|", std::to_string(h.metrics.face_ln_area.mean)}};
+      rd.hemispheres.push_back(std::move(rh));
+    }
+    if (compare) {
+      rd.normative.present = true;
+      rd.normative.num_subjects = static_cast<int>(reference.subjects.size());
+      rd.normative.normalisation = reference.normalisation;
+      rd.normative.domain = "square, K = " + std::to_string(reference.grid.k);
+      rd.normative.description = fs::path(in.normative).filename().string() + " (" + reference.software + ")";
+      rd.normative.threshold = options.z_threshold;
+      for (const ElementCluster& c : cmp.clusters) {
+        ReportCluster r;
+        r.id = c.id;
+        r.hemisphere = c.hemisphere;
+        r.sign = c.sign < 0 ? "hypo" : "hyper";
+        r.num_elements = static_cast<int>(c.elements.size());
+        r.area_mm2 = c.area_mm2;
+        r.peak_z = c.peak_z;
+        r.mean_z = c.mean_z;
+        r.peak_row = c.peak_row;
+        r.peak_col = c.peak_col;
+        for (int i = 0; i < 3; ++i) r.peak_ras[i] = c.peak_ras[i];
+        rd.clusters.push_back(r);
+      }
+    } else {
+      rd.notes.push_back("No normative reference was given (--normative): PET only, no z-scores.");
+    }
+    write_report((stage / "report.html").string(), rd);
+    summary.files.push_back("report.html");
+  }
+  for (const auto& [base, j] : sidecars) io::write_file_atomically((stage / (base + ".json")).string(), j.dump(2) + "\n");
+  log.end(summary);
+  io::write_file_atomically((stage / "log.txt").string(), software() + "\nsubject sub-" + in.id + "\n" + log.text());
+  summary.files.push_back("log.txt");
+
+  // Swap the finished folder into place.
+  if (fs::exists(final_dir)) {
+    const fs::path old = fs::path(options.out_dir) / (".sub-" + in.id + ".old-" + std::to_string(::getpid()));
+    fs::rename(final_dir, old);
+    fs::rename(stage, final_dir);
+    fs::remove_all(old);
+  } else {
+    fs::rename(stage, final_dir);
+  }
+  summary.subject_dir = final_dir.string();
+  summary.flips_left = hemis[0].metrics.flips;
+  summary.flips_right = hemis[1].metrics.flips;
+  summary.element_cv_left = hemis[0].metrics.element_cv;
+  summary.element_cv_right = hemis[1].metrics.element_cv;
+  return summary;
+}
+
+}  // namespace authalic::analysis

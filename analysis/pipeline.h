@@ -1,0 +1,57 @@
+#pragma once
+// The clinician's per-subject pipeline (`authalic run`, issue 7). It composes the other steps and
+// adds no math of its own: load and check inputs -> authalic square map per hemisphere (and the
+// 1:2 whole-brain rectangle) -> PET sampling -> equal-area elements -> comparison with a normative
+// reference when given -> report.
+//
+// Output safety: everything is written into a staging folder `OUT/.sub-<id>.partial-<pid>` that
+// is renamed to `OUT/sub-<id>` only when every file is complete, so an interrupted run never
+// leaves a folder that looks finished. Same inputs -> identical files (no timestamps in outputs;
+// the log's timings live in log.txt only).
+#include <string>
+#include <vector>
+
+#include "core/progress.h"
+
+namespace authalic::analysis {
+
+struct SubjectInputs {
+  std::string id;  // subject label without "sub-"
+  std::string lh_white, lh_pial, rh_white, rh_pial;  // surfaces (FreeSurfer, GIFTI, ...)
+  std::string lh_cortex, rh_cortex;                  // cortex regions (FreeSurfer label, GIFTI label/mask)
+  std::string pet;                                   // NIfTI, MGH/MGZ or a DICOM folder
+  std::string t1;                                    // optional, for --register
+  std::string normative;                             // optional reference (authalic normative build)
+  double age = 0;                                    // years, 0 = unknown
+};
+
+// FreeSurfer subject folder -> inputs: surf/?h.white, surf/?h.pial, label/?h.cortex.label;
+// the surfaces' footers carry c_ras (tkregister RAS -> scanner RAS). Throws InputError naming the
+// missing file.
+SubjectInputs inputs_from_subjects_dir(const std::string& subjects_dir, const std::string& subject);
+
+struct RunOptions {
+  std::string out_dir;          // the subject's folder goes to out_dir/sub-<id>
+  bool force = false;           // replace an existing sub-<id> folder
+  int k = 32;                   // K x K elements per hemisphere square (2K x K on the rectangle)
+  double depth_mm = 10.0;       // normal projection depth (Zou et al. 2011, section 5.2)
+  std::string normalize = "global";  // "none", "global", or a NIfTI mask path (reference region)
+  double z_threshold = 2.0;     // |z| flagged as abnormal
+  bool report = true;           // write report.html
+  bool rectangle = true;        // also the 1:2 whole-brain rectangle map
+};
+
+struct RunSummary {
+  std::string subject_dir;      // final folder
+  std::vector<std::pair<std::string, double>> step_seconds;
+  int flips_left = 0, flips_right = 0;
+  double element_cv_left = 0, element_cv_right = 0;
+  int abnormal_elements = -1;   // -1 without a reference
+  int clusters = -1;
+  std::vector<std::string> files;  // written, relative to subject_dir
+};
+
+// Runs the pipeline. Throws InputError (bad input, nothing written) or ProcessingError.
+RunSummary run_subject(const SubjectInputs& inputs, const RunOptions& options, const ProgressFn& progress = {});
+
+}  // namespace authalic::analysis

@@ -1,0 +1,88 @@
+#pragma once
+// The per-subject HTML report: one self-contained file (pictures embedded as base64 PNG, inline
+// CSS, no script, no external resource) that opens offline in any browser. The pipeline fills a
+// ReportData with what it computed; this module draws the pictures (analysis/render.h) and writes
+// the page. Nothing here depends on the clock, so the same data give the same bytes.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/mesh.h"
+#include "io/image_io.h"
+
+namespace authalic::analysis {
+
+using KeyValues = std::vector<std::pair<std::string, std::string>>;
+
+// One cluster of connected abnormal elements (from the normative comparison).
+struct ReportCluster {
+  int id = 0;
+  std::string hemisphere;        // "left", "right", "both" (rectangle domain)
+  std::string sign;              // "hypo" (z <= -threshold) or "hyper"
+  int num_elements = 0;
+  double area_mm2 = 0.0;         // cortical area of its elements
+  double peak_z = 0.0;
+  double mean_z = 0.0;
+  int peak_row = -1, peak_col = -1;  // element of the peak (row 0 = bottom of the domain)
+  double peak_ras[3] = {0, 0, 0};    // scanner RAS mm of that element's centroid
+};
+
+struct ReportHemisphere {
+  std::string name = "left";     // "left" / "right"
+  bool left = true;
+  // The flat map (#V x >= 2, in the domain: [0,1]^2 for the square) on the surface's vertices.
+  MatrixXd flat_uv;
+  MatrixXi faces;                // the map's triangles (the cortex)
+  double domain_width = 1.0, domain_height = 1.0;
+  int grid_cols = 0, grid_rows = 0;  // element grid (K x K on the square)
+  // A 3D surface on the same vertices for the lateral/medial views (pial, white or inflated; RAS mm).
+  MatrixXd surface_V;
+  MatrixXi surface_F;            // faces for the 3D views (may include the medial wall); empty = `faces`
+  VectorXi element_of_vertex;    // per vertex element id (row * cols + col), -1 outside: draws the grid in 3D
+  // Values.
+  VectorXd pet;                  // per vertex (normalised PET), may hold NaN outside the cortex
+  VectorXd z;                    // per vertex z-score; empty = take element_z through element_of_vertex
+  std::vector<double> element_pet, element_z;  // rows x cols, row 0 at the bottom; may be empty
+  KeyValues distortion;          // e.g. {"flipped triangles", "0"}, {"element-area CV (K=32)", "0.006"}
+};
+
+struct ReportNormative {
+  bool present = false;
+  int num_subjects = 0;
+  std::string normalisation;     // e.g. "global cortical mean (SUVR)"
+  std::string domain;            // e.g. "square, K = 32"
+  std::string description;       // free text: what the reference is, its file, its software version
+  double threshold = 2.0;        // |z| flagged
+};
+
+struct ReportData {
+  std::string title = "Authalic PET report";
+  std::string subject_id;
+  KeyValues subject_info;        // e.g. {"PET", "sub-01_pet.nii.gz (sha256 ...)"}, {"age", "67"}
+  KeyValues parameters;          // processing parameters (sampling depth, normalisation, K, ...)
+  std::string pet_units = "SUVR";
+  std::vector<ReportHemisphere> hemispheres;
+  ReportNormative normative;
+  std::vector<ReportCluster> clusters;
+  std::vector<std::string> notes;  // warnings or remarks shown at the top
+  std::string software;          // e.g. "authalic 0.1.0 (abc1234)"
+};
+
+// The page as a string (UTF-8 HTML5, well-formed: every element closed, void elements written
+// as <img ... />). Section ids: subject, parameters, flat-maps, surface-views, clusters,
+// normative, distortion.
+std::string report_html(const ReportData& data);
+// Writes report_html(data) atomically.
+void write_report(const std::string& path, const ReportData& data);
+
+// Helpers, public for tests and other pages.
+std::string base64_encode(const std::vector<std::uint8_t>& bytes);
+std::vector<std::uint8_t> base64_decode(const std::string& text);  // throws std::invalid_argument on bad input
+std::string html_escape(const std::string& text);
+// A PNG data URI for an <img src>.
+std::string png_data_uri(const io::RgbImage& image);
+
+// Colour range of a PET map: 2nd to 98th percentile of the finite values (robust to outliers).
+std::pair<double, double> robust_range(const VectorXd& values);
+
+}  // namespace authalic::analysis

@@ -1,0 +1,140 @@
+// `authalic elements SURFACE MAP VALUES OUT_PREFIX`: equal-area cortical elements of an authalic map
+// (Zou et al. 2011 section 5.2) and their exported images. See analysis/elements.h.
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "analysis/elements.h"
+#include "app/command.h"
+#include "core/error.h"
+#include "core/version.h"
+#include "io/surface_formats.h"
+#include "io/surface_io.h"
+
+namespace authalic::app {
+namespace {
+
+struct ElementsArgs {
+  std::string surface, map, values, prefix;
+  int k = 32;
+  std::string domain = "square";
+  std::string hemisphere;
+  std::string subject;
+  double age = std::nan("");
+  std::string normalisation, units;
+};
+
+// The sampling metadata of a GIFTI func file written by `authalic sample` (normalisation, units).
+// io/ has no public reader of a func file's metadata, so this uses its GIFTI reader directly.
+std::map<std::string, std::string> func_metadata(const std::string& path) {
+  const std::string lower = [&] {
+    std::string s = path;
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+  }();
+  if (lower.find(".gii") == std::string::npos) return {};
+  return io::detail::read_gifti(path).metadata;
+}
+
+int run_elements(const ElementsArgs& a) {
+  const auto start = std::chrono::steady_clock::now();
+  const analysis::ElementDomain domain = analysis::parse_element_domain(a.domain);
+  const analysis::ElementGrid grid = analysis::element_grid(domain, a.k);
+  const io::Surface surface = io::read_surface(a.surface);
+  const io::Surface map = io::read_surface(a.map);
+  const VectorXd values = io::read_per_vertex(a.values, surface.mesh.num_vertices());
+  const auto meta = func_metadata(a.values);
+
+  const analysis::ElementMap em =
+      analysis::prepare_element_map(surface.mesh.V, surface.mesh.F, map.mesh.V, map.mesh.F, values, domain, a.map);
+  const analysis::ElementResult result = analysis::compute_elements(em, grid, surface.to_scanner);
+
+  analysis::ElementTable table;
+  table.grid = grid;
+  std::string hemisphere = a.hemisphere.empty() ? analysis::hemisphere_of(surface.metadata, a.surface) : a.hemisphere;
+  if (domain == analysis::ElementDomain::Rectangle && a.hemisphere.empty()) hemisphere = "both";
+  table.blocks.push_back({hemisphere, result.block.elements});
+  auto from_meta = [&](const std::string& key, const std::string& fallback) {
+    const auto it = meta.find(key);
+    return it != meta.end() ? it->second : fallback;
+  };
+  table.normalisation = !a.normalisation.empty() ? a.normalisation : from_meta("normalisation", "none");
+  table.units = !a.units.empty() ? a.units : from_meta("units", "");
+  table.subject_id = a.subject;
+  table.age = a.age;
+  table.metadata = {{"software", std::string("authalic ") + kVersion + " (" + kGitRevision + ")"},
+                    {"surface", a.surface},
+                    {"map", a.map},
+                    {"values", a.values},
+                    {"element_area_cv", std::to_string(result.area_cv)},
+                    {"total_area_mm2", std::to_string(result.total_area_mm2)},
+                    {"integration", "area-weighted mean over triangles clipped to the cells (exact for linear values)"}};
+  if (meta.count("sampling")) table.metadata["sampling"] = meta.at("sampling");
+  if (meta.count("normalisation_detail")) table.metadata["normalisation_detail"] = meta.at("normalisation_detail");
+
+  const MatrixXd V_scanner = [&] {
+    MatrixXd out(surface.mesh.V.rows(), 3);
+    for (Eigen::Index i = 0; i < out.rows(); ++i)
+      out.row(i) = (surface.to_scanner * surface.mesh.V.row(i).head<3>().transpose().homogeneous()).head<3>().transpose();
+    return out;
+  }();
+  const auto paths = analysis::write_element_outputs(a.prefix, table, result, V_scanner, surface.mesh.F, hemisphere != "right");
+
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  for (const auto& n : em.notes) info("authalic elements: note: " + n);
+  info("authalic elements: " + std::to_string(grid.cols) + " x " + std::to_string(grid.rows) + " " + a.domain +
+       " elements, element-area CV " + std::to_string(result.area_cv) + ", cortex " + std::to_string(result.total_area_mm2) +
+       " mm^2; wrote " + paths.csv + ", " + paths.nifti + ", " + paths.png + ", " + paths.label);
+  if (global_options().json) {
+    nlohmann::json j;
+    j["domain"] = a.domain;
+    j["k"] = grid.k;
+    j["rows"] = grid.rows;
+    j["cols"] = grid.cols;
+    j["hemisphere"] = hemisphere;
+    j["element_area_cv"] = result.area_cv;
+    j["total_area_mm2"] = result.total_area_mm2;
+    j["inserted_vertices"] = em.inserted_vertices;
+    j["normalisation"] = table.normalisation;
+    j["units"] = table.units;
+    j["outputs"] = {{"csv", paths.csv},   {"sidecar", paths.sidecar}, {"nifti", paths.nifti}, {"area_nifti", paths.area_nifti},
+                    {"png", paths.png},   {"png_3d", paths.png_3d},   {"label", paths.label}};
+    j["notes"] = em.notes;
+    j["seconds"] = seconds;
+    std::cout << j.dump(2) << '\n';
+  }
+  return 0;
+}
+
+const bool registered = register_command({45, [](CLI::App& parent) {
+  auto a = std::make_shared<ElementsArgs>();
+  CLI::App* sub = parent.add_subcommand(
+      "elements",
+      "Equal-area cortical elements: the cells of a regular grid on an authalic map (K x K on the square, 2K x K on the "
+      "1:2 rectangle, 2K x K equal-area cells on the sphere), each with the area-weighted mean value of the cortex that "
+      "maps into it (triangles clipped to the cells), its cortical area (mm^2) and centroid (scanner RAS mm). Writes "
+      "OUT_PREFIX.csv (+ .json sidecar), OUT_PREFIX.nii.gz (element values; _area.nii.gz: areas in mm^2), "
+      "OUT_PREFIX.png (colour bar, units), OUT_PREFIX_3d.png (lateral/medial with the grid) and OUT_PREFIX.label.gii "
+      "(per-vertex element: key = id + 1).");
+  sub->add_option("SURFACE", a->surface, "Cortical surface the map was made from (mm)")->required();
+  sub->add_option("MAP", a->map, "Its authalic map (.surf.gii): x,y in the domain (or scaled), or a sphere")->required();
+  sub->add_option("VALUES", a->values, "Per-vertex values, e.g. from `authalic sample` (.func.gii)")->required();
+  sub->add_option("OUT_PREFIX", a->prefix, "Output prefix")->required();
+  sub->add_option("--k", a->k, "Grid resolution K")->check(CLI::Range(1, 1024))->capture_default_str();
+  sub->add_option("--domain", a->domain, "square, rectangle or sphere")
+      ->check(CLI::IsMember({"square", "rectangle", "sphere"}))
+      ->capture_default_str();
+  sub->add_option("--hemisphere", a->hemisphere, "left, right or both (default: from the surface's metadata or name)");
+  sub->add_option("--subject", a->subject, "Subject id recorded in the table (used by `authalic normative`)");
+  sub->add_option("--age", a->age, "Subject's age in years, recorded for the normative age model");
+  sub->add_option("--normalisation", a->normalisation,
+                  "Intensity normalisation of VALUES (default: from its metadata as written by `authalic sample`)");
+  sub->add_option("--units", a->units, "Units of VALUES (default: from its metadata)");
+  add_common_options(*sub);
+  sub->callback([a]() { set_exit_code(run_elements(*a)); });
+}});
+
+}  // namespace
+}  // namespace authalic::app

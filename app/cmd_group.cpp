@@ -1,0 +1,214 @@
+// authalic group: the per-subject pipeline for a whole cohort on one machine, then the normative
+// reference from its controls, then the patients' comparisons with it.
+//
+// Each subject runs as a child `authalic run` process: at most --jobs at once (bounded threads and
+// memory), and a subject that fails (bad file, crash, out of memory) is reported with its log while
+// the others go on. For cohorts beyond one machine, workflow/Snakefile runs the same steps as
+// independent jobs.
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "app/cohort.h"
+#include "app/command.h"
+#include "core/error.h"
+
+extern char** environ;
+namespace fs = std::filesystem;
+
+namespace authalic::app {
+namespace {
+
+struct Job {
+  std::string id;
+  std::vector<std::string> argv;
+  std::string log;
+  pid_t pid = -1;
+  int exit_code = -1;
+  double seconds = 0;
+  std::chrono::steady_clock::time_point start;
+};
+
+std::string self_executable() {
+  std::error_code ec;
+  const fs::path p = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw ProcessingError("cannot locate the authalic executable (/proc/self/exe): " + ec.message());
+  return p.string();
+}
+
+pid_t spawn_logged(const std::vector<std::string>& argv, const std::string& log_path) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) throw ProcessingError("cannot start " + argv[0] + ": " + std::strerror(rc));
+  return pid;
+}
+
+std::string last_line(const std::string& path) {
+  std::ifstream in(path);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last;
+}
+
+// Runs the jobs with at most `parallel` at once; returns when all ended. Progress on the terminal.
+void run_jobs(std::vector<Job>& jobs, int parallel, const std::string& stage, const ProgressFn& progress) {
+  std::size_t next = 0, done = 0;
+  std::map<pid_t, std::size_t> running;
+  while (done < jobs.size()) {
+    while (next < jobs.size() && static_cast<int>(running.size()) < parallel) {
+      Job& j = jobs[next];
+      j.start = std::chrono::steady_clock::now();
+      j.pid = spawn_logged(j.argv, j.log);
+      running[j.pid] = next++;
+    }
+    int status = 0;
+    const pid_t pid = ::waitpid(-1, &status, 0);
+    if (pid < 0) break;
+    auto it = running.find(pid);
+    if (it == running.end()) continue;
+    Job& j = jobs[it->second];
+    running.erase(it);
+    j.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - j.start).count();
+    j.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    ++done;
+    report(progress, stage, double(done) / jobs.size(),
+           "sub-" + j.id + (j.exit_code == 0 ? " done" : " FAILED (exit " + std::to_string(j.exit_code) + ")"));
+    if (j.exit_code != 0 && !global_options().json)
+      std::cerr << "\nauthalic group: sub-" << j.id << " failed (exit " << j.exit_code << "): " << last_line(j.log)
+                << " [log: " << j.log << "]\n";
+  }
+}
+
+std::vector<std::string> subject_args(const std::string& exe, const CohortSubject& s, int k, int threads,
+                                      const std::string& out) {
+  return {exe, "run", "--id", s.id, "--lh-white", s.lh_white, "--lh-pial", s.lh_pial, "--rh-white", s.rh_white,
+          "--rh-pial", s.rh_pial, "--lh-cortex", s.lh_cortex, "--rh-cortex", s.rh_cortex, "--pet", s.pet,
+          "--age", std::to_string(s.age), "--k", std::to_string(k), "--threads", std::to_string(threads),
+          "--out", out, "--force", "--quiet"};
+}
+
+struct GroupArgs {
+  std::string cohort, out;
+  int jobs = 2;
+  int k = 32;
+  bool force = false;
+};
+
+int run_group(const GroupArgs& a) {
+  const auto subjects = read_cohort(a.cohort);
+  if (fs::exists(a.out) && !fs::is_empty(a.out) && !a.force)
+    throw InputError(a.out + ": output folder exists and is not empty; choose another or pass --force");
+  fs::create_directories(fs::path(a.out) / "logs");
+  const std::string exe = self_executable();
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int parallel = std::max(1, a.jobs);
+  const int threads = std::max(1, cores / parallel);  // bounded: jobs x threads <= cores
+  const ProgressFn progress = terminal_progress();
+
+  auto make_jobs = [&](const std::string& role, const std::string& dir, const std::vector<std::string>& extra) {
+    std::vector<Job> jobs;
+    for (const auto& s : subjects) {
+      if (s.role != role) continue;
+      Job j;
+      j.id = s.id;
+      j.argv = subject_args(exe, s, a.k, threads, (fs::path(a.out) / dir).string());
+      j.argv.insert(j.argv.end(), extra.begin(), extra.end());
+      j.log = (fs::path(a.out) / "logs" / (s.id + ".log")).string();
+      jobs.push_back(std::move(j));
+    }
+    return jobs;
+  };
+
+  // 1. Controls: maps, sampling, elements.
+  std::vector<Job> controls = make_jobs("control", "controls", {});
+  info("authalic group: " + std::to_string(controls.size()) + " controls, " + std::to_string(parallel) +
+       " at once, " + std::to_string(threads) + " threads each");
+  run_jobs(controls, parallel, "controls", progress);
+
+  // 2. Reference from the controls that succeeded.
+  std::vector<std::string> build = {exe, "normative", "build", (fs::path(a.out) / "normative.json").string()};
+  int used = 0;
+  for (const auto& j : controls) {
+    if (j.exit_code != 0) continue;
+    build.push_back((fs::path(a.out) / "controls" / ("sub-" + j.id) / ("sub-" + j.id + "_elements.csv")).string());
+    ++used;
+  }
+  nlohmann::json summary;
+  summary["cohort"] = a.cohort;
+  summary["controls_used"] = used;
+  int reference_exit = -1;
+  if (used >= 2) {
+    build.push_back("--quiet");
+    Job ref;
+    ref.id = "reference";
+    ref.argv = build;
+    ref.log = (fs::path(a.out) / "logs" / "normative.log").string();
+    std::vector<Job> one{ref};
+    run_jobs(one, 1, "reference", progress);
+    reference_exit = one[0].exit_code;
+  } else {
+    std::cerr << "authalic group: only " << used << " controls succeeded; at least 2 are needed for a reference\n";
+  }
+
+  // 3. Patients, compared with the reference when there is one.
+  std::vector<std::string> extra;
+  if (reference_exit == 0) extra = {"--normative", (fs::path(a.out) / "normative.json").string()};
+  std::vector<Job> patients = make_jobs("patient", "patients", extra);
+  run_jobs(patients, parallel, "patients", progress);
+
+  int failed = 0;
+  for (const auto* group : {&controls, &patients})
+    for (const auto& j : *group) {
+      summary["subjects"].push_back({{"id", j.id}, {"exit_code", j.exit_code}, {"seconds", j.seconds}, {"log", j.log}});
+      if (j.exit_code != 0) ++failed;
+    }
+  summary["reference_exit_code"] = reference_exit;
+  summary["failed"] = failed;
+  if (global_options().json) std::cout << summary.dump(2) << '\n';
+  info("authalic group: " + std::to_string(controls.size() + patients.size() - failed) + " subjects done, " +
+       std::to_string(failed) + " failed; reference " + (reference_exit == 0 ? "built" : "NOT built"));
+  return (failed == 0 && reference_exit == 0) ? 0 : 3;
+}
+
+const bool registered = register_command({60, [](CLI::App& parent) {
+  auto args = std::make_shared<GroupArgs>();
+  CLI::App* sub = parent.add_subcommand(
+      "group",
+      "Run the per-subject pipeline for a cohort (controls first), build the normative reference from the "
+      "controls, then compare the patients with it. COHORT.csv columns: subject_id,role(control|patient),age,"
+      "pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex (paths relative to the CSV). Writes "
+      "OUT/controls/sub-<id>/, OUT/patients/sub-<id>/, OUT/normative.json and OUT/logs/<id>.log. "
+      "A failed subject is reported and does not stop the others (exit 3 at the end).");
+  sub->add_option("cohort", args->cohort, "Cohort list (CSV)")->required()->check(CLI::ExistingFile);
+  sub->add_option("out", args->out, "Output folder")->required();
+  sub->add_option("--jobs,-j", args->jobs, "Subjects processed at once (threads are shared among them)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--k", args->k, "Element grid: K x K per hemisphere square")->check(CLI::Range(2, 512));
+  sub->add_flag("--force", args->force, "Write into an existing output folder");
+  add_common_options(*sub);
+  sub->callback([args]() { set_exit_code(run_group(*args)); });
+}});
+
+}  // namespace
+}  // namespace authalic::app

@@ -1,0 +1,174 @@
+// `authalic normative build|merge|compare`: the normative reference of equal-area elements from
+// control subjects, exact merging of partial references, and a patient's z-scores and clusters.
+// See analysis/normative.h.
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "analysis/normative.h"
+#include "app/command.h"
+#include "core/error.h"
+#include "io/surface_io.h"
+
+namespace authalic::app {
+namespace {
+
+struct BuildArgs {
+  std::string out;
+  std::vector<std::string> tables;
+  std::string list;
+};
+
+struct MergeArgs {
+  std::string out;
+  std::vector<std::string> inputs;
+};
+
+struct CompareArgs {
+  std::string reference, patient, prefix;
+  double threshold = 2.0;
+  std::vector<std::string> labels;
+  double age = std::nan("");
+  bool no_age = false;
+  int min_subjects = 3;
+};
+
+void print_reference_summary(const analysis::NormativeReference& r, const std::string& path, double seconds) {
+  info("authalic normative: " + path + ": " + std::to_string(r.subjects.size()) + " subjects, " + to_string(r.grid.domain) +
+       " K = " + std::to_string(r.grid.k) + ", " + std::to_string(r.hemispheres.size()) + " hemisphere block(s), normalisation " +
+       r.normalisation + (r.age_model ? ", age model" : ", no age model"));
+  if (global_options().json) {
+    nlohmann::json j;
+    j["output"] = path;
+    j["num_subjects"] = r.subjects.size();
+    j["domain"] = to_string(r.grid.domain);
+    j["k"] = r.grid.k;
+    j["hemispheres"] = r.hemispheres;
+    j["normalisation"] = r.normalisation;
+    j["units"] = r.units;
+    j["age_model"] = r.age_model;
+    j["seconds"] = seconds;
+    std::cout << j.dump(2) << '\n';
+  }
+}
+
+int run_build(const BuildArgs& a) {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<std::string> tables = a.tables;
+  if (!a.list.empty()) {
+    std::ifstream in(a.list);
+    if (!in) throw InputError(a.list + ": cannot read the table list");
+    std::string line;
+    while (std::getline(in, line)) {
+      while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+      if (!line.empty() && line[0] != '#') tables.push_back(line);
+    }
+  }
+  if (tables.empty()) throw InputError("normative build: no element table given; list the controls' *_elements.csv files");
+  const auto ref = analysis::build_reference(tables, terminal_progress());
+  analysis::write_reference(a.out, ref);
+  print_reference_summary(ref, a.out, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  return 0;
+}
+
+int run_merge(const MergeArgs& a) {
+  const auto start = std::chrono::steady_clock::now();
+  if (a.inputs.empty()) throw InputError("normative merge: no reference given");
+  analysis::NormativeReference r = analysis::read_reference(a.inputs[0]);
+  for (std::size_t i = 1; i < a.inputs.size(); ++i)
+    r = analysis::merge_references(r, analysis::read_reference(a.inputs[i]), "the merged references", a.inputs[i]);
+  analysis::write_reference(a.out, r);
+  print_reference_summary(r, a.out, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  return 0;
+}
+
+int run_compare(const CompareArgs& a) {
+  const analysis::NormativeReference ref = analysis::read_reference(a.reference);
+  const analysis::ElementTable patient = analysis::read_element_table(a.patient);
+  analysis::CompareOptions o;
+  o.threshold = a.threshold;
+  o.age = a.age;
+  o.use_age = !a.no_age;
+  o.min_subjects = a.min_subjects;
+  const analysis::Comparison cmp = analysis::compare_to_reference(ref, patient, o);
+  if (!a.labels.empty() && a.labels.size() != ref.hemispheres.size())
+    throw InputError("--labels: " + std::to_string(a.labels.size()) + " label file(s) for " + std::to_string(ref.hemispheres.size()) +
+                     " hemisphere block(s); give one per block, in the order " + [&] {
+                       std::string s;
+                       for (const auto& h : ref.hemispheres) s += (s.empty() ? "" : ", ") + h;
+                       return s;
+                     }());
+  std::vector<VectorXi> vertex_elements;
+  for (const auto& path : a.labels) {
+    const VectorXd keys = io::read_per_vertex(path);
+    VectorXi ve(keys.size());
+    for (Eigen::Index v = 0; v < keys.size(); ++v) {
+      const double k = keys(v);
+      if (!(k >= 0 && k <= ref.grid.num_elements() && k == std::floor(k)))
+        throw InputError(path + ": vertex " + std::to_string(v) + " has label " + std::to_string(k) + ", not an element of a " +
+                         std::to_string(ref.grid.rows) + " x " + std::to_string(ref.grid.cols) +
+                         " grid; give the .label.gii written by `authalic elements` at this K");
+      ve(v) = static_cast<int>(k) - 1;
+    }
+    vertex_elements.push_back(ve);
+  }
+  const auto paths = analysis::write_comparison_outputs(a.prefix, ref, a.reference, patient, a.patient, cmp, vertex_elements);
+  for (const auto& n : cmp.notes) info("authalic normative compare: note: " + n);
+  info("authalic normative compare: " + std::to_string(cmp.num_compared) + " elements compared, " + std::to_string(cmp.num_hypo) +
+       " hypo and " + std::to_string(cmp.num_hyper) + " hyper at |z| >= " + std::to_string(cmp.threshold) + ", " +
+       std::to_string(cmp.clusters.size()) + " cluster(s); wrote " + paths.summary_json);
+  if (global_options().json)
+    std::cout << analysis::comparison_summary_json(ref, a.reference, patient, a.patient, cmp, paths);
+  return 0;
+}
+
+const bool registered = register_command({50, [](CLI::App& parent) {
+  CLI::App* sub = parent.add_subcommand(
+      "normative",
+      "Normative reference of equal-area elements from control subjects (per element n, mean, SD by Welford; linear "
+      "age model when every control has an age), exact merging of references built separately, and comparison of a "
+      "patient: z = (patient - expected) / SD (hypometabolism negative), abnormal at |z| >= threshold, clusters of "
+      "touching abnormal elements.");
+  sub->require_subcommand(1);
+
+  auto b = std::make_shared<BuildArgs>();
+  CLI::App* build = sub->add_subcommand("build", "Build a reference (JSON) from element tables (*_elements.csv with their .json sidecars)");
+  build->add_option("OUT", b->out, "Output reference (.json)")->required();
+  build->add_option("TABLES", b->tables, "Element tables of the control subjects");
+  build->add_option("--list", b->list, "Text file with one element-table path a line (for large cohorts)");
+  add_common_options(*build);
+  build->callback([b]() { set_exit_code(run_build(*b)); });
+
+  auto m = std::make_shared<MergeArgs>();
+  CLI::App* merge = sub->add_subcommand("merge", "Merge references exactly (same domain, K, hemispheres, normalisation; disjoint subjects)");
+  merge->add_option("OUT", m->out, "Output reference (.json)")->required();
+  merge->add_option("REFERENCES", m->inputs, "References to merge")->required();
+  add_common_options(*merge);
+  merge->callback([m]() { set_exit_code(run_merge(*m)); });
+
+  auto c = std::make_shared<CompareArgs>();
+  CLI::App* compare = sub->add_subcommand(
+      "compare",
+      "Compare a patient's element table with a reference. Writes OUT_PREFIX_z.nii.gz, OUT_PREFIX_z.png, "
+      "OUT_PREFIX_abnormal.csv, OUT_PREFIX.json and, with --labels, per-vertex z as OUT_PREFIX[_<hemisphere>]_z.func.gii.");
+  compare->add_option("REFERENCE", c->reference, "Normative reference (.json)")->required();
+  compare->add_option("PATIENT", c->patient, "Patient's element table (.csv with its .json sidecar)")->required();
+  compare->add_option("OUT_PREFIX", c->prefix, "Output prefix")->required();
+  compare->add_option("--threshold", c->threshold, "|z| at or beyond which an element is abnormal")->capture_default_str();
+  compare->add_option("--labels", c->labels,
+                      "Element label file(s) (.label.gii from `authalic elements`), one per hemisphere block in the "
+                      "reference's order, for per-vertex z");
+  compare->add_option("--age", c->age, "Patient's age in years (default: from the table)");
+  compare->add_flag("--no-age", c->no_age, "Ignore the reference's age model");
+  compare->add_option("--min-subjects", c->min_subjects, "Elements with fewer controls get no z")
+      ->check(CLI::Range(2, 1000000))
+      ->capture_default_str();
+  add_common_options(*compare);
+  compare->callback([c]() { set_exit_code(run_compare(*c)); });
+}});
+
+}  // namespace
+}  // namespace authalic::app

@@ -1,0 +1,91 @@
+// `authalic render OUT.png MAP [MAP ...]`: pictures of flat maps without a display, e.g. to look at
+// a map from `authalic flatten --uv`, or to put an authalic map beside a conformal one.
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <tuple>
+
+#include "analysis/render.h"
+#include "analysis/report.h"
+#include "app/command.h"
+#include "core/error.h"
+#include "io/image_io.h"
+#include "io/surface_io.h"
+
+namespace authalic::app {
+namespace {
+
+struct RenderArgs {
+  std::string out;
+  std::vector<std::string> maps;
+  std::vector<std::string> captions;
+  std::string values;
+  std::string colormap = "gray_r";
+  std::vector<double> range;
+  std::string label;
+  int grid = 0;
+  std::string domain = "square";
+  int width = 600;
+  std::string title;
+};
+
+void setup(CLI::App& parent) {
+  auto a = std::make_shared<RenderArgs>();
+  CLI::App* sub = parent.add_subcommand(
+      "render",
+      "Draw one or more flat maps (surfaces whose x,y are the map, e.g. the --uv output of `authalic flatten`) side by "
+      "side into a PNG, coloured by a per-vertex file, with the element grid. No display needed.");
+  sub->add_option("OUT", a->out, "Output PNG")->required();
+  sub->add_option("MAP", a->maps, "Flat map surface(s) (GIFTI, FreeSurfer, ...): x,y in the domain")->required();
+  sub->add_option("--values", a->values, "Per-vertex values (GIFTI func/shape, FreeSurfer curv/sulc) for the colours");
+  sub->add_option("--colormap", a->colormap, "gray, viridis, coolwarm, hot (append _r to reverse)")->capture_default_str();
+  sub->add_option("--range", a->range, "Colour range: LO HI (default: 2nd-98th percentile)")->expected(2);
+  sub->add_option("--label", a->label, "Colour-bar label with units, e.g. 'sulc (mm)'");
+  sub->add_option("--grid", a->grid, "Draw the K x K element grid (2K x K on the rectangle)")->check(CLI::Range(0, 512));
+  sub->add_option("--domain", a->domain, "square ([0,1]^2) or rectangle ([0,2] x [0,1])")
+      ->check(CLI::IsMember({"square", "rectangle"}))
+      ->capture_default_str();
+  sub->add_option("--caption", a->captions, "Caption under each map (repeat, in order)");
+  sub->add_option("--title", a->title, "Title over each map");
+  sub->add_option("--width", a->width, "Width of each map picture (pixels)")->check(CLI::Range(100, 4000))->capture_default_str();
+  add_common_options(*sub);
+  sub->callback([a]() {
+    analysis::colormap(a->colormap, 0.0);  // an unknown name is an input error before any work
+    std::vector<io::RgbImage> pictures;
+    for (const auto& path : a->maps) {
+      const io::Surface map = io::read_surface(path);
+      if (map.mesh.num_faces() == 0) throw InputError(path + ": the map has no triangles; give a flat surface");
+      analysis::ScalarColouring c;
+      if (!a->values.empty()) {
+        c.values = io::read_per_vertex(a->values, map.mesh.num_vertices());
+        c.colormap = a->colormap;
+        c.label = a->label;
+        if (a->range.size() == 2) {
+          c.vmin = a->range[0];
+          c.vmax = a->range[1];
+        } else {
+          std::tie(c.vmin, c.vmax) = analysis::robust_range(c.values);
+        }
+      }
+      analysis::FlatRenderOptions o;
+      o.width = a->width;
+      o.domain_width = a->domain == "rectangle" ? 2.0 : 1.0;
+      o.grid_cols = a->domain == "rectangle" ? 2 * a->grid : a->grid;
+      o.grid_rows = a->grid;
+      o.title = a->title;
+      o.draw_colour_bar = !a->values.empty();
+      pictures.push_back(analysis::render_flat(map.mesh.V, map.mesh.F, c, o));
+    }
+    const io::RgbImage out = pictures.size() == 1 && a->captions.empty()
+                                 ? pictures.front()
+                                 : analysis::compose_horizontal(pictures, 16, a->captions);
+    io::write_png(a->out, out);
+    info("render: " + a->out + " (" + std::to_string(out.width) + " x " + std::to_string(out.height) + " pixels)");
+  });
+}
+
+const bool registered = register_command({90, setup});
+
+}  // namespace
+}  // namespace authalic::app

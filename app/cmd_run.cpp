@@ -1,0 +1,100 @@
+// authalic run: the clinician's per-subject pipeline (analysis/pipeline.h). Exit codes: 0 ok,
+// 2 bad input (nothing written), 3 processing failure.
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "analysis/pipeline.h"
+#include "app/command.h"
+#include "core/error.h"
+
+namespace authalic::app {
+namespace {
+
+struct RunArgs {
+  analysis::SubjectInputs inputs;
+  analysis::RunOptions options;
+  std::string subjects_dir, subject;
+};
+
+int run(RunArgs& a) {
+  analysis::SubjectInputs in = a.inputs;
+  if (!a.subjects_dir.empty() || !a.subject.empty()) {
+    if (a.subjects_dir.empty() || a.subject.empty())
+      throw InputError("--subjects-dir and --subject go together; give both, or the explicit --lh-white ... inputs");
+    const std::string id = in.id;
+    in = analysis::inputs_from_subjects_dir(a.subjects_dir, a.subject);
+    if (!id.empty()) in.id = id;
+    in.pet = a.inputs.pet;
+    in.normative = a.inputs.normative;
+    in.age = a.inputs.age;
+    in.t1 = a.inputs.t1;
+  } else {
+    const std::pair<const char*, const std::string*> need[] = {
+        {"--lh-white", &in.lh_white}, {"--lh-pial", &in.lh_pial},     {"--rh-white", &in.rh_white},
+        {"--rh-pial", &in.rh_pial},   {"--lh-cortex", &in.lh_cortex}, {"--rh-cortex", &in.rh_cortex}};
+    for (const auto& [flag, value] : need)
+      if (value->empty())
+        throw InputError(std::string(flag) + " is missing; give all six surface/label inputs, or --subjects-dir and --subject");
+  }
+  if (in.pet.empty()) throw InputError("--pet is missing; give the subject's PET (NIfTI, MGH/MGZ or a DICOM folder)");
+  const analysis::RunSummary s = analysis::run_subject(in, a.options, terminal_progress());
+  if (global_options().json) {
+    nlohmann::json j = {{"subject_dir", s.subject_dir},
+                        {"flips", {{"left", s.flips_left}, {"right", s.flips_right}}},
+                        {"element_area_cv", {{"left", s.element_cv_left}, {"right", s.element_cv_right}}},
+                        {"files", s.files}};
+    if (s.abnormal_elements >= 0) {
+      j["abnormal_elements"] = s.abnormal_elements;
+      j["clusters"] = s.clusters;
+    }
+    for (const auto& [step, sec] : s.step_seconds) j["step_seconds"][step] = sec;
+    std::cout << j.dump(2) << '\n';
+  } else {
+    double total = 0;
+    for (const auto& [step, sec] : s.step_seconds) {
+      info("  " + step + ": " + std::to_string(sec) + " s");
+      total += sec;
+    }
+    info("authalic run: sub-" + in.id + " done in " + std::to_string(total) + " s; report: " + s.subject_dir + "/report.html");
+  }
+  return 0;
+}
+
+const bool registered = register_command({70, [](CLI::App& parent) {
+  auto a = std::make_shared<RunArgs>();
+  CLI::App* sub = parent.add_subcommand(
+      "run",
+      "Per-subject pipeline: load and check inputs -> authalic square map per hemisphere -> PET by normal projection "
+      "(inward from the pial surface) -> equal-area elements -> z-scores against a normative reference (if given) "
+      "-> report. Writes OUT/sub-<id>/ (BIDS-derivative names, a JSON sidecar per file, report.html, log.txt); "
+      "the folder appears only when complete. Surfaces in tkregister RAS (FreeSurfer) are moved to scanner RAS "
+      "with their footer's c_ras. Exit codes: 0 ok, 2 bad input, 3 processing failure.");
+  auto& in = a->inputs;
+  sub->add_option("--id", in.id, "Subject label (letters and digits; default: the FreeSurfer subject name)");
+  sub->add_option("--lh-white", in.lh_white, "Left white surface (FreeSurfer, GIFTI, VTK, ...; mm)");
+  sub->add_option("--lh-pial", in.lh_pial, "Left pial surface, same vertices as --lh-white");
+  sub->add_option("--rh-white", in.rh_white, "Right white surface");
+  sub->add_option("--rh-pial", in.rh_pial, "Right pial surface");
+  sub->add_option("--lh-cortex", in.lh_cortex, "Left cortex region (FreeSurfer label, GIFTI label/mask): one disk");
+  sub->add_option("--rh-cortex", in.rh_cortex, "Right cortex region");
+  sub->add_option("--subjects-dir", a->subjects_dir, "FreeSurfer SUBJECTS_DIR (instead of the six inputs above)");
+  sub->add_option("--subject", a->subject, "FreeSurfer subject name in --subjects-dir");
+  sub->add_option("--pet", in.pet, "PET volume registered to the surfaces (NIfTI, MGH/MGZ, DICOM folder); world = scanner RAS");
+  sub->add_option("--t1", in.t1, "T1 MRI the PET is registered to (recorded; registration is `authalic sample --register`)");
+  sub->add_option("--normative", in.normative, "Normative reference (authalic normative build): adds z-scores");
+  sub->add_option("--age", in.age, "Age in years (used by references with an age model)");
+  sub->add_option("--out", a->options.out_dir, "Output folder; the subject goes to OUT/sub-<id>")->required();
+  sub->add_flag("--force", a->options.force, "Replace an existing OUT/sub-<id>");
+  sub->add_option("--k", a->options.k, "Elements: K x K per hemisphere (equal-area cells)")->check(CLI::Range(2, 512));
+  sub->add_option("--depth", a->options.depth_mm, "Normal projection depth, mm (default 10, Zou et al. 2011)")
+      ->check(CLI::Range(0.0, 50.0));
+  sub->add_option("--normalize", a->options.normalize,
+                  "Intensity normalisation: none, global (cortical mean), or a reference-region mask NIfTI (SUVR)");
+  sub->add_option("--threshold", a->options.z_threshold, "|z| at or beyond which an element is abnormal (default 2)");
+  sub->add_flag("--no-report", [a](std::int64_t) { a->options.report = false; }, "Skip report.html");
+  add_common_options(*sub);
+  sub->callback([a]() { set_exit_code(run(*a)); });
+}});
+
+}  // namespace
+}  // namespace authalic::app

@@ -1,0 +1,224 @@
+// `authalic sample VOLUME SURFACE OUT.func.gii`: PET on the cortex (normal projection, ribbon or
+// vertex values), optionally normalised, as GIFTI func plus a PNG. See analysis/sampling.h.
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <tuple>
+
+#include "analysis/elements.h"
+#include "analysis/render.h"
+#include "analysis/report.h"
+#include "analysis/sampling.h"
+#include "app/command.h"
+#include "core/error.h"
+#include "core/version.h"
+#include "io/image_io.h"
+#include "io/surface_io.h"
+#include "io/volume_io.h"
+
+namespace authalic::app {
+namespace {
+
+struct SampleArgs {
+  std::string volume, surface, out;
+  std::string ribbon;
+  double depth = 10.0;
+  double step = 0.0;
+  std::string stat = "mean";
+  bool trilinear = false;
+  bool outward = false;
+  std::string normalize = "none";
+  std::string surface_to_volume;
+  std::string map;
+  std::string png;
+  int frame = -1;
+  bool sum_frames = false;
+};
+
+std::string matrix_text(const Eigen::Matrix4d& T) {
+  std::ostringstream s;
+  s.precision(10);
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) s << T(r, c) << (c == 3 ? (r == 3 ? "" : "; ") : " ");
+  return s.str();
+}
+
+std::string png_path_for(const std::string& out) {
+  for (const std::string ext : {".func.gii", ".shape.gii", ".gii"})
+    if (out.size() > ext.size() && out.compare(out.size() - ext.size(), ext.size(), ext) == 0)
+      return out.substr(0, out.size() - ext.size()) + ".png";
+  return out + ".png";
+}
+
+int run_sample(const SampleArgs& a) {
+  const auto start = std::chrono::steady_clock::now();
+  if (a.trilinear && !a.ribbon.empty()) throw InputError("--trilinear and --ribbon: choose one sampling mode");
+  if (a.stat != "mean" && a.stat != "max") throw InputError("--stat: '" + a.stat + "' is not mean or max");
+
+  io::VolumeReadOptions vo;
+  vo.frame = a.frame;
+  vo.sum_frames = a.sum_frames;
+  const io::Volume volume = io::read_volume(a.volume, vo);
+  const io::Surface surface = io::read_surface(a.surface);
+  if (surface.mesh.num_faces() == 0) throw InputError(a.surface + ": the surface has no triangles");
+
+  Eigen::Matrix4d to_volume = surface.to_scanner;
+  std::string transform_source = surface.has_volume_geometry ? "FreeSurfer footer (tkregister RAS + c_ras)" : "identity (surface in scanner RAS)";
+  if (!a.surface_to_volume.empty()) {
+    std::ifstream in(a.surface_to_volume);
+    if (!in) throw InputError(a.surface_to_volume + ": cannot read the surface-to-volume matrix");
+    std::stringstream buf;
+    buf << in.rdbuf();
+    to_volume = analysis::parse_affine_text(buf.str(), a.surface_to_volume);
+    transform_source = a.surface_to_volume;
+  }
+  const MatrixXd V_world = analysis::transform_points(to_volume, surface.mesh.V);
+
+  analysis::SamplingOptions so;
+  so.depth_mm = a.depth;
+  so.step_mm = a.step;
+  so.outward = a.outward;
+  so.statistic = a.stat == "max" ? analysis::SamplingStatistic::Max : analysis::SamplingStatistic::Mean;
+  analysis::SamplingResult result;
+  if (a.trilinear) {
+    result = analysis::sample_at_vertices(volume, V_world, surface.mesh.F, so);
+  } else if (!a.ribbon.empty()) {
+    const io::Surface other = io::read_surface(a.ribbon);
+    Eigen::Matrix4d other_to_volume = a.surface_to_volume.empty() ? other.to_scanner : to_volume;
+    result = analysis::sample_ribbon(volume, V_world, analysis::transform_points(other_to_volume, other.mesh.V),
+                                     surface.mesh.F, so);
+  } else {
+    result = analysis::sample_normal_projection(volume, V_world, surface.mesh.F, so);
+  }
+
+  // Intensity normalisation.
+  analysis::Normalisation norm;
+  norm.units = volume.units.empty() ? "PET units" : volume.units;
+  norm.description = "none: values in the PET's units";
+  if (a.normalize == "global") {
+    norm = analysis::global_cortical_mean(result.values, V_world, surface.mesh.F);
+  } else if (a.normalize != "none") {
+    io::Volume mask = io::read_volume(a.normalize);
+    norm = analysis::reference_region_mean(volume, mask);
+  }
+  analysis::apply_normalisation(result.values, norm);
+
+  // Output.
+  io::FuncWriteOptions fo;
+  fo.column_names = {"pet"};
+  const std::string hemisphere = analysis::hemisphere_of(surface.metadata, a.surface);
+  if (hemisphere == "left") fo.anatomical_structure = "CortexLeft";
+  if (hemisphere == "right") fo.anatomical_structure = "CortexRight";
+  fo.metadata = {{"software", std::string("authalic ") + kVersion + " (" + kGitRevision + ")"},
+                 {"volume", a.volume},
+                 {"surface", a.surface},
+                 {"sampling", result.method},
+                 {"surface_to_volume", matrix_text(to_volume)},
+                 {"surface_to_volume_source", transform_source},
+                 {"normalisation", analysis::to_string(norm.kind)},
+                 {"normalisation_detail", norm.description},
+                 {"normalisation_reference_value", std::to_string(norm.reference_value)},
+                 {"units", norm.units}};
+  if (!a.ribbon.empty()) fo.metadata["ribbon_surface"] = a.ribbon;
+  io::write_per_vertex(a.out, result.values, fo);
+
+  // Picture: the flat map when given, else lateral and medial views of the surface.
+  const std::string png = a.png.empty() ? png_path_for(a.out) : a.png;
+  analysis::ScalarColouring c;
+  c.values = result.values;
+  c.colormap = "viridis";
+  c.label = norm.units;
+  std::tie(c.vmin, c.vmax) = analysis::robust_range(result.values);
+  io::RgbImage picture;
+  if (!a.map.empty()) {
+    const io::Surface map = io::read_surface(a.map);
+    if (map.mesh.num_vertices() < surface.mesh.num_vertices())
+      throw InputError(a.map + ": the map has fewer vertices than the surface; give the map of this surface");
+    c.values = VectorXd::Constant(map.mesh.num_vertices(), std::nan(""));
+    c.values.head(result.values.size()) = result.values;
+    analysis::FlatRenderOptions o;
+    o.x0 = map.mesh.V.col(0).minCoeff();
+    o.y0 = map.mesh.V.col(1).minCoeff();
+    o.domain_width = std::max(1e-12, map.mesh.V.col(0).maxCoeff() - o.x0);
+    o.domain_height = std::max(1e-12, map.mesh.V.col(1).maxCoeff() - o.y0);
+    o.title = "PET on the flat map";
+    picture = analysis::render_flat(map.mesh.V, map.mesh.F, c, o);
+  } else {
+    analysis::SurfaceRenderOptions o;
+    o.left_hemisphere = hemisphere != "right";
+    o.title = "PET on the surface";
+    picture = analysis::render_surface_views(V_world, surface.mesh.F, c, {analysis::View::Lateral, analysis::View::Medial}, o);
+  }
+  io::write_png(png, picture);
+
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  for (const auto& n : result.notes) info("authalic sample: note: " + n);
+  info("authalic sample: " + result.method + "; " + std::to_string(result.vertices_checked) + " vertices, " +
+       std::to_string(result.nan_vertices) + " NaN; normalisation " + norm.description + "; wrote " + a.out + " and " + png);
+  if (global_options().json) {
+    nlohmann::json j;
+    j["output"] = a.out;
+    j["png"] = png;
+    j["method"] = result.method;
+    j["step_mm"] = result.step_mm;
+    j["samples_per_vertex"] = result.samples_per_vertex;
+    j["vertices"] = result.vertices_checked;
+    j["vertices_outside_fov"] = result.vertices_outside;
+    j["outside_fraction"] = result.outside_fraction;
+    j["nan_vertices"] = result.nan_vertices;
+    j["normals_flipped"] = result.normals_flipped;
+    j["normalisation"] = analysis::to_string(norm.kind);
+    j["normalisation_reference_value"] = norm.reference_value;
+    j["units"] = norm.units;
+    j["notes"] = result.notes;
+    j["seconds"] = seconds;
+    std::cout << j.dump(2) << '\n';
+  }
+  return 0;
+}
+
+const bool registered = register_command({40, [](CLI::App& parent) {
+  auto a = std::make_shared<SampleArgs>();
+  CLI::App* sub = parent.add_subcommand(
+      "sample",
+      "Sample a PET volume on a cortical surface (Zou et al. 2011 section 5.2): by default the mean of trilinear "
+      "samples along the inverse vertex normal from the surface inward over --depth mm. Coordinates: the volume's "
+      "sform/qform world (scanner RAS mm; radiological files included); FreeSurfer surfaces are moved from tkregister "
+      "RAS to scanner RAS with their c_ras, or by --surface-to-volume. A surface mostly outside the volume is refused. "
+      "Writes OUT (GIFTI func, one value per vertex, normalisation in its metadata) and a PNG beside it. NaN voxels are "
+      "left out of the interpolation; vertices with no finite sample are NaN.");
+  sub->add_option("VOLUME", a->volume, "PET volume: NIfTI (.nii/.nii.gz), MGH/MGZ, or a DICOM series folder")->required();
+  sub->add_option("SURFACE", a->surface, "Cortical surface (FreeSurfer, GIFTI, VTK, ...), mm")->required();
+  sub->add_option("OUT", a->out, "Output per-vertex values (.func.gii)")->required();
+  sub->add_option("--ribbon", a->ribbon,
+                  "Ribbon mode: the other surface of the cortical ribbon (white with pial, same vertices); the value is "
+                  "the mean along the segment between corresponding vertices (at least 11 samples)");
+  sub->add_option("--depth", a->depth, "Normal projection depth (mm)")->capture_default_str()->check(CLI::Range(0.0, 100.0));
+  sub->add_option("--step", a->step, "Sampling step (mm); default and maximum: half the smallest voxel size")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--stat", a->stat, "Statistic along the segment: mean, or max (as 3D-SSP)")
+      ->check(CLI::IsMember({"mean", "max"}))
+      ->capture_default_str();
+  sub->add_flag("--trilinear", a->trilinear, "The trilinear value at the vertex itself (no projection)");
+  sub->add_flag("--outward", a->outward, "Project along the outward normal instead of inward");
+  sub->add_option("--normalize,--normalise", a->normalize,
+                  "Intensity normalisation: none, global (divide by the area-weighted cortical mean), or a NIfTI mask of "
+                  "a reference region (e.g. cerebellum, pons; value > 0.5 inside) giving SUV ratios")
+      ->capture_default_str();
+  sub->add_option("--surface-to-volume", a->surface_to_volume,
+                  "Text file with a 4x4 matrix (row by row) taking the surface's coordinates to the volume's world (scanner "
+                  "RAS mm); default: the surface's own (FreeSurfer c_ras, else identity)");
+  sub->add_option("--map", a->map, "Flat map of SURFACE (e.g. from `authalic flatten`) for the PNG; default: 3D views");
+  sub->add_option("--png", a->png, "PNG path (default: OUT with .png)");
+  sub->add_option("--frame", a->frame, "4D PET: the frame to sample (0-based)")->check(CLI::NonNegativeNumber);
+  sub->add_flag("--sum-frames", a->sum_frames, "4D PET: sum all frames");
+  add_common_options(*sub);
+  sub->callback([a]() { set_exit_code(run_sample(*a)); });
+}});
+
+}  // namespace
+}  // namespace authalic::app

@@ -1,0 +1,170 @@
+// `authalic sphere SURFACE OUT.surf.gii [--metrics M.json] [--png P.png] [--radius R]`: authalic
+// map of a closed genus-0 surface onto a sphere (core/sphere_map.h), written on the input's
+// vertex indexing.
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <tuple>
+
+#include "analysis/render.h"
+#include "analysis/report.h"
+#include "app/command.h"
+#include "app/map_json.h"
+#include "core/error.h"
+#include "core/metrics.h"
+#include "core/sphere_map.h"
+#include "core/sulcal_depth.h"
+#include "io/image_io.h"
+#include "io/surface_io.h"
+
+namespace authalic::app {
+namespace {
+
+struct SphereArgs {
+  std::string surface;
+  std::string out;
+  std::string metrics;
+  std::string png;
+  std::string conformal;
+  std::string sulc;
+  double radius = 100.0;
+  bool area_radius = false;
+  int puncture = -1;
+  int grid = 0;
+  int passes = 4;
+};
+
+const char* kOrientationRule =
+    "+x right, +y anterior, +z superior of the input's RAS frame: the rotation that best aligns each vertex's sphere "
+    "position with its direction from the surface's area centroid (area-weighted Procrustes)";
+
+void run(const SphereArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const io::Surface surface = io::read_surface(a.surface);
+  const TriMesh& mesh = surface.mesh;
+  SphereMapOptions options;
+  options.puncture_face = a.puncture;
+  options.flow_options.grid_cells = a.grid;
+  options.flow_options.max_passes = a.passes;
+  options.flow = a.passes > 0;
+  SphereMapResult r;
+  try {
+    r = authalic_sphere_map(mesh, options, terminal_progress());
+  } catch (const InputError& e) {
+    throw InputError(a.surface + ": " + e.what());
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  const double area = face_areas(mesh.V, mesh.F).sum();
+  const double radius = a.area_radius ? std::sqrt(area / (4.0 * M_PI)) : a.radius;
+  const bool left = is_left_hemisphere(surface.metadata, mesh.V);
+  io::SurfaceWriteOptions wo;
+  wo.geometric_type = "Spherical";
+  const auto structure = surface.metadata.find("AnatomicalStructurePrimary");
+  if (structure != surface.metadata.end()) wo.anatomical_structure = structure->second;
+  wo.metadata = {{"authalic_map", "sphere"},
+                 {"authalic_radius_mm", std::to_string(radius)},
+                 {"authalic_orientation", kOrientationRule},
+                 {"authalic_source", a.surface}};
+  TriMesh out{r.sphere * radius, mesh.F};
+  io::write_surface(a.out, out, wo);
+  if (!a.conformal.empty()) {
+    wo.metadata["authalic_map"] = "sphere (conformal initial map, Haker et al. 2000)";
+    io::write_surface(a.conformal, TriMesh{r.conformal * radius, mesh.F}, wo);
+  }
+
+  const MapMetrics final_metrics = map_metrics(mesh.V, r.sphere, mesh.F, MapDomain::Sphere, 32);
+  nlohmann::json j = {{"surface", a.surface},
+                      {"output", a.out},
+                      {"vertices", mesh.num_vertices()},
+                      {"faces", mesh.num_faces()},
+                      {"surface_area_mm2", area},
+                      {"radius_mm", radius},
+                      {"hemisphere", left ? "left" : "right"},
+                      {"orientation_rule", kOrientationRule},
+                      {"puncture_face", r.puncture_face},
+                      {"puncture_attempts", r.puncture_attempts},
+                      {"conformal_flips", r.conformal_flips},
+                      {"mobius_centroid_residual", r.mobius_residual},
+                      {"repaired_vertices", r.repaired_vertices},
+                      {"flips", r.flips},
+                      {"metrics", metrics_json(final_metrics)},
+                      {"seconds", {{"conformal", r.seconds_conformal}, {"flow", r.seconds_flow}, {"total", seconds}}}};
+  {
+    nlohmann::json rot = nlohmann::json::array();
+    for (int i = 0; i < 3; ++i) rot.push_back({r.rotation(i, 0), r.rotation(i, 1), r.rotation(i, 2)});
+    j["rotation"] = rot;
+    nlohmann::json passes = nlohmann::json::array();
+    for (const auto& p : r.flow.passes)
+      passes.push_back({{"density_min", p.rho_min}, {"density_max", p.rho_max}, {"density_abs_ln_mean", p.rho_abs_log_mean},
+                        {"rk4_steps", p.rk4_steps}, {"seconds", p.seconds}});
+    j["flow"] = {{"method", "Moser flow on a fixed cube-sphere background"},
+                 {"grid_cells_per_edge", r.flow.grid_cells},
+                 {"grid_vertices", r.flow.grid_vertices},
+                 {"iterations", r.flow.passes.size()},
+                 {"passes", passes}};
+  }
+  if (!a.metrics.empty()) {
+    j["conformal_metrics"] = metrics_json(map_metrics(mesh.V, r.conformal, mesh.F, MapDomain::Sphere, 32));
+    write_json_file(a.metrics, j);
+  }
+
+  if (!a.png.empty()) {
+    analysis::ScalarColouring c;
+    c.values = a.sulc.empty() ? sulcal_depth_proxy(mesh.V, mesh.F) : io::read_per_vertex(a.sulc, mesh.num_vertices());
+    c.colormap = "gray_r";
+    c.label = a.sulc.empty() ? "depth below smoothed surface (mm)" : "sulcal depth";
+    std::tie(c.vmin, c.vmax) = analysis::robust_range(c.values);
+    analysis::SurfaceRenderOptions so;
+    so.left_hemisphere = left;
+    so.title = "authalic sphere";
+    io::write_png(a.png, analysis::render_surface_views(out.V, out.F, c, {analysis::View::Lateral, analysis::View::Medial}, so));
+  }
+
+  std::ostringstream line;
+  line << "sphere: " << a.out << " (radius " << radius << " mm): " << r.flips << " flipped faces, element CV "
+       << final_metrics.element_cv << " (" << final_metrics.element_cols << "x" << final_metrics.element_rows
+       << "), per-face mean |ln area ratio| " << final_metrics.face_ln_area.mean << ", " << seconds << " s";
+  if (global_options().json) {
+    std::cout << j.dump(2) << '\n';
+  } else {
+    info(line.str());
+  }
+  if (r.flips > 0) {
+    std::cerr << "authalic: warning: " << r.flips << " faces of the sphere map are still flipped after repair\n";
+    set_exit_code(3);
+  }
+}
+
+void setup(CLI::App& parent) {
+  auto a = std::make_shared<SphereArgs>();
+  CLI::App* sub = parent.add_subcommand(
+      "sphere",
+      "Area-preserving map of a closed genus-0 surface (a hemisphere or a whole brain) onto a sphere: Haker's conformal "
+      "map, Moebius centring, then Moser's area-restoring flow. Orientation: +x right, +y anterior, +z superior. "
+      "Exit code 3 (after writing) if flipped faces remain.");
+  sub->add_option("SURFACE", a->surface, "Closed genus-0 surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, STL), mm")->required();
+  sub->add_option("OUT", a->out, "Output sphere surface (GIFTI .surf.gii), same vertices and triangles as SURFACE")->required();
+  sub->add_option("--metrics", a->metrics, "Write distortion metrics (JSON; areas in mm^2, element grid 64 x 32)");
+  sub->add_option("--png", a->png, "Write a PNG of the sphere seen from lateral and medial, shaded by sulcal depth");
+  sub->add_option("--sulc", a->sulc, "Per-vertex sulcal depth for the PNG (FreeSurfer sulc or GIFTI shape; default: depth "
+                                     "below a smoothed copy of the surface, mm)");
+  sub->add_option("--radius", a->radius, "Sphere radius (mm)")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_flag("--area-radius", a->area_radius,
+                "Use the radius whose sphere area equals the surface's area (sqrt(area / 4 pi), mm) instead of --radius");
+  sub->add_option("--conformal", a->conformal, "Also write the conformal initial map (GIFTI), same radius");
+  sub->add_option("--puncture", a->puncture, "Face index of Haker's puncture (default: best-shaped faces in turn)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--grid", a->grid, "Background cube-sphere cells per cube edge (default: from the mesh size)")
+      ->check(CLI::Range(8, 512));
+  sub->add_option("--passes", a->passes, "Moser flow passes")->check(CLI::Range(0, 50))->capture_default_str();
+  add_common_options(*sub);
+  sub->callback([a]() { run(*a); });
+}
+
+const bool registered = register_command({40, setup});
+
+}  // namespace
+}  // namespace authalic::app

@@ -1,0 +1,20 @@
+#pragma once
+// Cohort lists for group runs: a CSV with a header naming the columns
+//   subject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex
+// (extra columns are ignored; paths are relative to the CSV's folder; role is control or patient).
+#include <string>
+#include <vector>
+
+namespace authalic::app {
+
+struct CohortSubject {
+  std::string id, role;
+  double age = 0;
+  std::string pet, lh_white, lh_pial, rh_white, rh_pial, lh_cortex, rh_cortex;  // absolute paths
+};
+
+// Throws InputError naming the file and line for a missing column, an empty id, a duplicate id,
+// an unknown role or a missing file.
+std::vector<CohortSubject> read_cohort(const std::string& path);
+
+}  // namespace authalic::app

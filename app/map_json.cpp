@@ -1,0 +1,47 @@
+// JSON helpers for the map subcommands (see map_json.h).
+#include "app/map_json.h"
+
+#include <map>
+
+#include "io/atomic_file.h"
+
+namespace authalic::app {
+
+namespace {
+nlohmann::json stats_json(const AbsStats& s) {
+  return {{"mean", s.mean}, {"median", s.median}, {"p95", s.p95}, {"p99", s.p99}, {"max", s.max}, {"count", s.count}};
+}
+}  // namespace
+
+nlohmann::json metrics_json(const MapMetrics& m) {
+  return {{"domain", to_string(m.domain)},
+          {"faces", m.faces},
+          {"vertices", m.vertices},
+          {"flips", m.flips},
+          {"face_ln_area_abs", stats_json(m.face_ln_area)},
+          {"face_ln_area_sd", m.face_ln_area_sd},
+          {"vertex_ln_area_abs", stats_json(m.vertex_ln_area)},
+          {"upsilon_mean", m.upsilon_mean},
+          {"lambda", stats_json(m.lambda)},
+          {"element_grid", {m.element_cols, m.element_rows}},
+          {"element_cv", m.element_cv},
+          {"element_min_over_mean", m.element_min},
+          {"element_max_over_mean", m.element_max},
+          {"element_mean_mm2", m.element_mean_mm2},
+          {"surface_area_mm2", m.surface_area},
+          {"domain_area", m.domain_area},
+          {"outside_fraction", m.outside_fraction}};
+}
+
+void write_json_file(const std::string& path, const nlohmann::json& j) { io::write_file_atomically(path, j.dump(2) + "\n"); }
+
+bool is_left_hemisphere(const std::map<std::string, std::string>& metadata, const MatrixXd& V) {
+  const auto it = metadata.find("AnatomicalStructurePrimary");
+  if (it != metadata.end()) {
+    if (it->second.find("Left") != std::string::npos) return true;
+    if (it->second.find("Right") != std::string::npos) return false;
+  }
+  return V.rows() == 0 || V.col(0).mean() <= 0.0;
+}
+
+}  // namespace authalic::app

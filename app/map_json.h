@@ -1,0 +1,25 @@
+#pragma once
+// JSON form of map distortion metrics (core/metrics.h), shared by the map subcommands
+// (sphere, rectangle) so their metrics files use the same keys.
+#include <nlohmann/json.hpp>
+
+#include <map>
+#include <string>
+
+#include "core/metrics.h"
+
+namespace authalic::app {
+
+// {"flips", "faces", "vertices", "face_ln_area_abs": {mean, median, p95, p99, max}, "vertex_ln_area_abs",
+//  "lambda", "upsilon_mean", "element_grid": [cols, rows], "element_cv", "element_min_over_mean",
+//  "element_max_over_mean", "element_mean_mm2", "surface_area_mm2", "domain_area", "outside_fraction"}
+nlohmann::json metrics_json(const MapMetrics& m);
+
+// Writes JSON (2-space indent, trailing newline) atomically.
+void write_json_file(const std::string& path, const nlohmann::json& j);
+
+// Left hemisphere? From GIFTI AnatomicalStructurePrimary ("CortexLeft"/"CortexRight") when
+// present, else from the side of the midline (x < 0 in RAS) the surface's centroid lies on.
+bool is_left_hemisphere(const std::map<std::string, std::string>& metadata, const MatrixXd& V);
+
+}  // namespace authalic::app

@@ -1,0 +1,588 @@
+// Area-restoring flows on the rectangle (see core/authalic_flow.h): the grid Moser flow, the
+// mesh-based discrete Lie flow with Delaunay flips and adaptive steps, polish and flip repair.
+#include "core/authalic_flow.h"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "core/conformal_map.h"
+#include "core/grid_overlap.h"
+#include "core/metrics.h"
+#include "core/poisson_dct.h"
+#include "/tmp/geom/timer.h"
+
+namespace authalic {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Bilinear interpolation of a grid of samples at (x0 + c dx, y0 + r dy), clamped at the edges
+// (constant extension beyond the outermost samples).
+struct Bilinear {
+  const MatrixXd* m;
+  double x0, dx, y0, dy;
+  double operator()(double x, double y) const {
+    const int nc = static_cast<int>(m->cols()), nr = static_cast<int>(m->rows());
+    double fx = (x - x0) / dx, fy = (y - y0) / dy;
+    int c0, r0;
+    double tx, ty;
+    locate(fx, nc, &c0, &tx);
+    locate(fy, nr, &r0, &ty);
+    const int c1 = std::min(c0 + 1, nc - 1), r1 = std::min(r0 + 1, nr - 1);
+    const MatrixXd& a = *m;
+    return (1 - ty) * ((1 - tx) * a(r0, c0) + tx * a(r0, c1)) + ty * ((1 - tx) * a(r1, c0) + tx * a(r1, c1));
+  }
+  static void locate(double f, int n, int* i0, double* t) {
+    if (n == 1 || !(f > 0)) {
+      *i0 = 0;
+      *t = 0;
+      return;
+    }
+    if (f >= n - 1) {
+      *i0 = n - 2;
+      *t = 1;
+      return;
+    }
+    *i0 = static_cast<int>(f);
+    *t = f - *i0;
+  }
+};
+
+struct Stats {
+  double mean = 0, p99 = 0, max = 0;
+};
+Stats vertex_stats(const VectorXd& r) {
+  const AbsStats s = abs_stats(r);
+  return {s.mean, s.p99, s.max};
+}
+
+// Keeps boundary vertices on their side (corners fixed) and everything inside the rectangle.
+inline void constrain(double& x, double& y, int mask, double w) {
+  x = std::clamp(x, 0.0, w);
+  y = std::clamp(y, 0.0, 1.0);
+  if (mask & kSideLeft) x = 0.0;
+  if (mask & kSideRight) x = w;
+  if (mask & kSideBottom) y = 0.0;
+  if (mask & kSideTop) y = 1.0;
+}
+
+}  // namespace
+
+std::string to_string(FlowMethod m) { return m == FlowMethod::Grid ? "grid" : "mesh"; }
+
+VectorXd target_face_measure(const MatrixXd& V, const MatrixXi& F, const VectorXd& density, double total) {
+  VectorXd a = face_areas(V, F);
+  if (density.size() > 0) {
+    for (Eigen::Index f = 0; f < F.rows(); ++f) a[f] *= (density[F(f, 0)] + density[F(f, 1)] + density[F(f, 2)]) / 3.0;
+  }
+  const double s = a.sum();
+  if (s > 0) a *= total / s;
+  return a;
+}
+
+VectorXd vertex_log_ratio(const VectorXd& face_target, const MatrixXd& UV, const MatrixXi& F, int num_vertices) {
+  const VectorXd a2 = signed_face_areas_2d(UV, F).cwiseAbs();
+  VectorXd t = VectorXd::Zero(num_vertices), d = VectorXd::Zero(num_vertices);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      t[F(f, c)] += face_target[f] / 3.0;
+      d[F(f, c)] += a2[f] / 3.0;
+    }
+  const double st = t.sum(), sd = d.sum();
+  VectorXd r(num_vertices);
+  for (int v = 0; v < num_vertices; ++v)
+    r[v] = (t[v] > 0 && d[v] > 0) ? std::log((t[v] / st) / (d[v] / sd)) : std::numeric_limits<double>::quiet_NaN();
+  return r;
+}
+
+MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const MatrixXi& F, const VectorXi& side_mask,
+                         double width, int resolution, double smoothing_cells, int rk4_steps) {
+  const int ny = std::max(2, resolution);
+  const int nx = std::max(2, static_cast<int>(std::lround(width * resolution)));
+  const double hx = width / nx, hy = 1.0 / ny;
+
+  // Density of the pushed-forward surface measure per cell (exact clipping: area-weighted).
+  GridSpec grid;
+  grid.cols = nx;
+  grid.rows = ny;
+  grid.width = width;
+  grid.height = 1.0;
+  const VectorXd cells = rasterize_face_measure(UV, F, face_target, grid);
+  MatrixXd rho(ny, nx);
+  for (int r = 0; r < ny; ++r)
+    for (int c = 0; c < nx; ++c) rho(r, c) = cells[r * nx + c] / (hx * hy);
+  // Normalise to mean 1 (the measure's total equals the domain area up to parts lost outside).
+  const double mean = rho.mean();
+  if (mean > 0) rho /= mean;
+
+  NeumannPoissonGrid solver(nx, ny, hx, hy);
+  MatrixXd rho_s, g;
+  solver.smooth_and_solve(rho, smoothing_cells * std::max(hx, hy), &rho_s, &g);
+  rho_s = rho_s.cwiseMax(1e-3);  // the smoothed density of a covering map is positive; guard anyway
+  MatrixXd gx, gy;
+  staggered_gradient(g, hx, hy, &gx, &gy);
+  const Bilinear vx{&gx, 0.0, hx, 0.5 * hy, hy};
+  const Bilinear vy{&gy, 0.5 * hx, hx, 0.0, hy};
+  const Bilinear dens{&rho_s, 0.5 * hx, hx, 0.5 * hy, hy};
+
+  // Which vertices move: those used by a face.
+  std::vector<char> used(UV.rows(), 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) used[F(f, c)] = 1;
+
+  MatrixXd out = UV;
+  const double dt = 1.0 / rk4_steps;
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index v = 0; v < UV.rows(); ++v) {
+    if (!used[v]) continue;
+    const int mask = side_mask.size() ? side_mask[v] : 0;
+    double x = UV(v, 0), y = UV(v, 1);
+    // Velocity ∇g / ((1 − t) ρ + t) at (x, y), with the side constraint (the normal component
+    // is zero on the walls already; zeroing it keeps roundoff from moving a vertex off its side).
+    auto vel = [&](double t, double px, double py, double* ux, double* uy) {
+      constrain(px, py, mask, width);
+      const double s = 1.0 / ((1.0 - t) * dens(px, py) + t);
+      *ux = (mask & (kSideLeft | kSideRight)) ? 0.0 : vx(px, py) * s;
+      *uy = (mask & (kSideBottom | kSideTop)) ? 0.0 : vy(px, py) * s;
+    };
+    for (int k = 0; k < rk4_steps; ++k) {
+      const double t = k * dt;
+      double k1x, k1y, k2x, k2y, k3x, k3y, k4x, k4y;
+      vel(t, x, y, &k1x, &k1y);
+      vel(t + 0.5 * dt, x + 0.5 * dt * k1x, y + 0.5 * dt * k1y, &k2x, &k2y);
+      vel(t + 0.5 * dt, x + 0.5 * dt * k2x, y + 0.5 * dt * k2y, &k3x, &k3y);
+      vel(t + dt, x + dt * k3x, y + dt * k3y, &k4x, &k4y);
+      x += dt / 6.0 * (k1x + 2 * k2x + 2 * k3x + k4x);
+      y += dt / 6.0 * (k1y + 2 * k2y + 2 * k3y + k4y);
+      constrain(x, y, mask, width);
+    }
+    out(v, 0) = x;
+    out(v, 1) = y;
+  }
+  return out;
+}
+
+double critical_step(const Eigen::Vector2d p[3], const Eigen::Vector2d d[3]) {
+  // Twice the signed area of (p_i + λ d_i) is a λ² + b λ + c (DLF section 5.4); the triangle first
+  // degenerates at the smallest positive root.
+  const Eigen::Vector2d e1 = p[1] - p[0], e2 = p[2] - p[0], f1 = d[1] - d[0], f2 = d[2] - d[0];
+  auto cross = [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) { return u.x() * v.y() - u.y() * v.x(); };
+  const double c = cross(e1, e2);
+  if (!(c > 0)) return kInf;  // already flipped or degenerate: nothing to protect
+  const double b = cross(e1, f2) + cross(f1, e2), a = cross(f1, f2);
+  const double scale = std::max({std::abs(a), std::abs(b), c});
+  double best = kInf;
+  if (std::abs(a) <= 1e-14 * scale) {
+    if (b < 0) best = -c / b;
+  } else {
+    const double disc = b * b - 4 * a * c;
+    if (disc >= 0) {
+      const double sq = std::sqrt(disc);
+      // Numerically stable pair of roots.
+      const double q = -0.5 * (b + (b >= 0 ? sq : -sq));
+      const double r1 = q / a, r2 = q != 0 ? c / q : kInf;
+      for (double r : {r1, r2})
+        if (r > 0) best = std::min(best, r);
+    }
+  }
+  return best;
+}
+
+namespace {
+
+// Cotangent stiffness matrix of the planar domain mesh (positive semi-definite, −cotmatrix).
+SparseMatrix domain_stiffness(const MatrixXd& UV, const MatrixXi& F) {
+  MatrixXd P = MatrixXd::Zero(UV.rows(), 3);
+  P.leftCols(2) = UV.leftCols(2);
+  return -cotmatrix(P, F);
+}
+
+// Barycentric vertex areas of a per-face measure.
+VectorXd vertex_share(const VectorXd& face_measure, const MatrixXi& F, int nv) {
+  VectorXd a = VectorXd::Zero(nv);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) a[F(f, c)] += face_measure[f] / 3.0;
+  return a;
+}
+
+// Solves the Neumann problem K g = b (K = stiffness, Σ b = 0) with a tiny mass shift for
+// definiteness. Deterministic (serial Cholesky).
+VectorXd solve_neumann(const SparseMatrix& K, const VectorXd& b, const VectorXd& mass) {
+  SparseMatrix A = K;
+  const double eps = 1e-9 * (K.diagonal().cwiseAbs().maxCoeff() + 1e-300) / (mass.maxCoeff() + 1e-300);
+  const double mean_mass = mass.mean() > 0 ? mass.mean() : 1.0;
+  for (Eigen::Index i = 0; i < A.rows(); ++i) A.coeffRef(i, i) += eps * (mass[i] > 0 ? mass[i] : mean_mass);
+  Eigen::SimplicialLDLT<SparseMatrix> solver(A);
+  if (solver.info() != Eigen::Success) return VectorXd::Zero(b.size());
+  VectorXd g = solver.solve(b);
+  return g;
+}
+
+// Per-vertex gradient of a P1 function on the planar mesh: the angle-weighted mean of the face
+// gradients (seed 000 eq. 16). Boundary vertices keep only the component along their side;
+// corners and unused vertices get zero.
+MatrixXd vertex_gradients(const MatrixXd& UV, const MatrixXi& F, const VectorXd& g, const VectorXi& side_mask) {
+  const Eigen::Index nv = UV.rows();
+  MatrixXd grad = MatrixXd::Zero(nv, 2);
+  VectorXd wsum = VectorXd::Zero(nv);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const int i0 = F(f, 0), i1 = F(f, 1), i2 = F(f, 2);
+    const Eigen::Vector2d p0 = UV.row(i0).head<2>().transpose(), p1 = UV.row(i1).head<2>().transpose(),
+                          p2 = UV.row(i2).head<2>().transpose();
+    const double a2 = (p1 - p0).x() * (p2 - p0).y() - (p1 - p0).y() * (p2 - p0).x();
+    if (std::abs(a2) < 1e-300) continue;
+    // ∇g = Σ g_i (perp of the opposite edge) / (2A), perp(e) = (−e_y, e_x) rotated into the face.
+    auto perp = [](const Eigen::Vector2d& e) { return Eigen::Vector2d(-e.y(), e.x()); };
+    const Eigen::Vector2d gf = (g[i0] * perp(p2 - p1) + g[i1] * perp(p0 - p2) + g[i2] * perp(p1 - p0)) / a2;
+    const Eigen::Vector2d q[3] = {p0, p1, p2};
+    const int id[3] = {i0, i1, i2};
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector2d u = q[(c + 1) % 3] - q[c], v = q[(c + 2) % 3] - q[c];
+      const double ang = std::atan2(std::abs(u.x() * v.y() - u.y() * v.x()), u.dot(v));
+      grad.row(id[c]) += ang * gf.transpose();
+      wsum[id[c]] += ang;
+    }
+  }
+  for (Eigen::Index v = 0; v < nv; ++v) {
+    if (wsum[v] > 0) grad.row(v) /= wsum[v];
+    const int m = side_mask.size() ? side_mask[v] : 0;
+    if (m & (kSideLeft | kSideRight)) grad(v, 0) = 0;
+    if (m & (kSideBottom | kSideTop)) grad(v, 1) = 0;
+  }
+  return grad;
+}
+
+// Largest step (capped at 1) keeping every triangle of F positively oriented, times theta.
+double adaptive_step(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta) {
+  double lam = kInf;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    Eigen::Vector2d p[3], d[3];
+    for (int c = 0; c < 3; ++c) {
+      p[c] = UV.row(F(f, c)).head<2>().transpose();
+      d[c] = D.row(F(f, c)).head<2>().transpose();
+    }
+    lam = std::min(lam, critical_step(p, d));
+  }
+  return std::min(1.0, theta * lam);
+}
+
+// Per-vertex steps: each vertex takes theta x the smallest critical step of its triangles (capped
+// at 1); triangles that would still flip (their vertices' steps differ) halve the steps of their
+// vertices until none flips. A single bad triangle then slows only its own vertices, not the mesh
+// (the stall measured with one global step, issue 3), and no triangle can flip.
+MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta,
+                              const VectorXi& side_mask, double w, double min_area, VectorXd* steps_out = nullptr) {
+  const Eigen::Index nv = UV.rows(), nf = F.rows();
+  VectorXd crit = VectorXd::Constant(nf, kInf);
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    Eigen::Vector2d p[3], d[3];
+    for (int c = 0; c < 3; ++c) {
+      p[c] = UV.row(F(f, c)).head<2>().transpose();
+      d[c] = D.row(F(f, c)).head<2>().transpose();
+    }
+    crit[f] = critical_step(p, d);
+  }
+  VectorXd lam = VectorXd::Ones(nv);
+  for (Eigen::Index f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) lam[F(f, c)] = std::min(lam[F(f, c)], theta * crit[f]);
+  MatrixXd out = UV;
+  auto place = [&](Eigen::Index v) {
+    double x = UV(v, 0) + lam[v] * D(v, 0), y = UV(v, 1) + lam[v] * D(v, 1);
+    constrain(x, y, side_mask.size() ? side_mask[v] : 0, w);
+    out(v, 0) = x;
+    out(v, 1) = y;
+  };
+  for (Eigen::Index v = 0; v < nv; ++v) place(v);
+  for (int round = 0; round < 40; ++round) {
+    const VectorXd a = signed_face_areas_2d(out, F);
+    std::vector<char> halve(nv, 0);
+    bool any = false;
+    for (Eigen::Index f = 0; f < nf; ++f)
+      if (!(a[f] > min_area))
+        for (int c = 0; c < 3; ++c) halve[F(f, c)] = 1, any = true;
+    if (!any) break;
+    for (Eigen::Index v = 0; v < nv; ++v)
+      if (halve[v]) {
+        lam[v] = round < 30 ? 0.5 * lam[v] : 0.0;
+        place(v);
+      }
+  }
+  if (steps_out) *steps_out = lam;
+  return out;
+}
+
+void apply_displacement(MatrixXd& UV, const MatrixXd& D, double lambda, const VectorXi& side_mask, double w) {
+  for (Eigen::Index v = 0; v < UV.rows(); ++v) {
+    double x = UV(v, 0) + lambda * D(v, 0), y = UV(v, 1) + lambda * D(v, 1);
+    constrain(x, y, side_mask.size() ? side_mask[v] : 0, w);
+    UV(v, 0) = x;
+    UV(v, 1) = y;
+  }
+}
+
+// One discrete Lie-flow displacement on the domain mesh F_dom (seed 000 section 4.2-4.3, DLF
+// 5.2): Δg = h_M − h_Ω (areas, Neumann), displacement = per-vertex ∇g. `fraction` < 1 asks for
+// only that part of the remaining area change (Zou eq. 19: 1 / (K − k + 1)).
+MatrixXd lie_displacement(const MatrixXd& UV, const MatrixXi& F_dom, const VectorXd& vertex_target, double fraction,
+                          const VectorXi& side_mask) {
+  const int nv = static_cast<int>(UV.rows());
+  const VectorXd dom = vertex_share(signed_face_areas_2d(UV, F_dom).cwiseAbs(), F_dom, nv);
+  VectorXd b = fraction * (vertex_target - dom);
+  // Compatibility of the Neumann problem: Σ b = 0 over the vertices in use.
+  double sum = 0;
+  int used = 0;
+  for (int v = 0; v < nv; ++v)
+    if (dom[v] > 0) sum += b[v], ++used;
+  for (int v = 0; v < nv; ++v) b[v] = dom[v] > 0 ? b[v] - sum / std::max(1, used) : 0.0;
+  const SparseMatrix K = domain_stiffness(UV, F_dom);
+  // K g = −(h_M − h_Ω): the stiffness is −Laplacian, and Δg = (target − domain) / area.
+  const VectorXd g = solve_neumann(K, -b, dom);
+  return vertex_gradients(UV, F_dom, g, side_mask);
+}
+
+}  // namespace
+
+int delaunay_flip(const MatrixXd& UV, MatrixXi& F, int max_flips) {
+  const int nv = static_cast<int>(UV.rows());
+  VectorXi twin = halfedge_twins(F, nv);
+  auto pt = [&](int v) { return Eigen::Vector2d(UV(v, 0), UV(v, 1)); };
+  auto cross = [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) { return u.x() * v.y() - u.y() * v.x(); };
+  // Angle opposite half-edge h (at the third corner of its face).
+  auto opposite_angle = [&](int h) {
+    const int f = h / 3, c = h % 3;
+    const Eigen::Vector2d a = pt(F(f, c)), b = pt(F(f, (c + 1) % 3)), o = pt(F(f, (c + 2) % 3));
+    const Eigen::Vector2d u = a - o, v = b - o;
+    return std::atan2(std::abs(cross(u, v)), u.dot(v));
+  };
+  int flips = 0;
+  std::vector<int> stack;
+  for (int h = 0; h < 3 * static_cast<int>(F.rows()); ++h)
+    if (twin[h] > h) stack.push_back(h);
+  std::reverse(stack.begin(), stack.end());
+  while (!stack.empty()) {
+    if (max_flips >= 0 && flips >= max_flips) break;
+    const int h = stack.back();
+    stack.pop_back();
+    const int t = twin[h];
+    if (t < 0) continue;
+    if (opposite_angle(h) + opposite_angle(t) <= M_PI + 1e-12) continue;
+    const int f = h / 3, c = h % 3, g = t / 3, d = t % 3;
+    const int a = F(f, c), b = F(f, (c + 1) % 3), x = F(f, (c + 2) % 3), y = F(g, (d + 2) % 3);
+    // The new triangles (x, a, y) and (y, b, x) must both be positively oriented.
+    if (!(cross(pt(a) - pt(x), pt(y) - pt(x)) > 0 && cross(pt(b) - pt(y), pt(x) - pt(y)) > 0)) continue;
+    // Outer half-edges before the flip: in f: b->x (c+1), x->a (c+2); in g: a->y (d+1), y->b (d+2).
+    const int h_bx = twin[3 * f + (c + 1) % 3], h_xa = twin[3 * f + (c + 2) % 3];
+    const int h_ay = twin[3 * g + (d + 1) % 3], h_yb = twin[3 * g + (d + 2) % 3];
+    // Face f becomes (x, a, y): half-edges x->a, a->y, y->x; face g becomes (y, b, x): y->b, b->x, x->y.
+    F.row(f) << x, a, y;
+    F.row(g) << y, b, x;
+    auto link = [&](int h1, int h2) {
+      twin[h1] = h2;
+      if (h2 >= 0) twin[h2] = h1;
+    };
+    link(3 * f + 0, h_xa);
+    link(3 * f + 1, h_ay);
+    link(3 * f + 2, 3 * g + 2);
+    link(3 * g + 0, h_yb);
+    link(3 * g + 1, h_bx);
+    ++flips;
+    for (int k = 0; k < 2; ++k) {
+      stack.push_back(3 * f + k);
+      stack.push_back(3 * g + k);
+    }
+  }
+  return flips;
+}
+
+int repair_flips(const MatrixXd& V, const MatrixXi& F, const VectorXi& side_mask, double width, MatrixXd& UV,
+                 int* remaining) {
+  const int nv = static_cast<int>(UV.rows());
+  const double min_area = 1e-12 * width / std::max<Eigen::Index>(1, F.rows());
+  auto flipped_faces = [&]() {
+    std::vector<int> out;
+    const VectorXd a = signed_face_areas_2d(UV, F);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      if (!(a[f] > min_area)) out.push_back(static_cast<int>(f));
+    return out;
+  };
+  std::vector<int> bad = flipped_faces();
+  if (bad.empty()) {
+    if (remaining) *remaining = 0;
+    return 0;
+  }
+  // Vertex adjacency (one ring) for growing the region.
+  std::vector<std::vector<int>> ring(nv);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) ring[F(f, c)].push_back(F(f, (c + 1) % 3)), ring[F(f, c)].push_back(F(f, (c + 2) % 3));
+  std::vector<char> in_region(nv, 0);
+  for (int f : bad)
+    for (int c = 0; c < 3; ++c) in_region[F(f, c)] = 1;
+  int moved = 0;
+  for (int round = 0; round < 12 && !bad.empty(); ++round) {
+    if (round > 0) {
+      // Grow by one ring around the vertices of the faces still flipped.
+      std::vector<char> grow = in_region;
+      for (int f : bad)
+        for (int c = 0; c < 3; ++c)
+          for (int u : ring[F(f, c)]) grow[u] = 1;
+      for (int v = 0; v < nv; ++v)
+        for (int u : ring[v])
+          if (in_region[v]) grow[u] = 1;
+      in_region.swap(grow);
+    }
+    // Free vertices: in the region and not corners; side vertices stay on their side (they are
+    // kept fixed here for simplicity: only interior vertices move).
+    std::vector<int> fixed;
+    MatrixXd fixed_uv;
+    std::vector<int> faces;
+    for (Eigen::Index f = 0; f < F.rows(); ++f) {
+      bool touches = false;
+      for (int c = 0; c < 3; ++c) touches = touches || (in_region[F(f, c)] && !(side_mask.size() && side_mask[F(f, c)]));
+      if (touches) faces.push_back(static_cast<int>(f));
+    }
+    MatrixXi Fl(faces.size(), 3);
+    for (size_t k = 0; k < faces.size(); ++k) Fl.row(k) = F.row(faces[k]);
+    std::vector<char> is_free(nv, 0);
+    int nfree = 0;
+    for (size_t k = 0; k < faces.size(); ++k)
+      for (int c = 0; c < 3; ++c) {
+        const int v = Fl(k, c);
+        if (in_region[v] && !(side_mask.size() && side_mask[v]) && !is_free[v]) is_free[v] = 1, ++nfree;
+      }
+    std::vector<char> seen(nv, 0);
+    for (size_t k = 0; k < faces.size(); ++k)
+      for (int c = 0; c < 3; ++c) {
+        const int v = Fl(k, c);
+        if (!is_free[v] && !seen[v]) seen[v] = 1, fixed.push_back(v);
+      }
+    fixed_uv.resize(fixed.size(), 2);
+    for (size_t k = 0; k < fixed.size(); ++k) fixed_uv.row(k) = UV.row(fixed[k]).head<2>();
+    // Mean-value weights from the surface: the re-placed patch keeps the surface's local shape.
+    const MatrixXd local = harmonic_map(V, Fl, fixed, fixed_uv, round < 6 ? HarmonicWeights::MeanValue : HarmonicWeights::Uniform);
+    for (int v = 0; v < nv; ++v)
+      if (is_free[v]) UV.row(v).head<2>() = local.row(v);
+    moved = nfree;
+    bad = flipped_faces();
+  }
+  if (remaining) *remaining = static_cast<int>(bad.size());
+  return moved;
+}
+
+FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& UV0, const VectorXi& side_mask,
+                         const FlowOptions& opt, const ProgressFn& progress) {
+  const int nv = static_cast<int>(V.rows());
+  const double w = opt.width;
+  FlowResult res;
+  FlowReport& rep = res.report;
+  rep.method = opt.method;
+  const VectorXd target = target_face_measure(V, F, opt.density, w);
+  MatrixXd UV = UV0.leftCols(2);
+
+  Stats cur = vertex_stats(vertex_log_ratio(target, UV, F, nv));
+  rep.initial_vertex_mean = cur.mean;
+  rep.initial_vertex_p99 = cur.p99;
+  auto met = [&](const Stats& s) { return s.mean <= opt.tolerance_mean && s.p99 <= opt.tolerance_p99; };
+  const double min_area = 1e-12 * w / std::max<Eigen::Index>(1, F.rows());
+
+  if (opt.method == FlowMethod::Grid) {
+    rep.stop_reason = "iteration limit";
+    for (int pass = 0; pass < opt.max_passes; ++pass) {
+      if (met(cur)) {
+        rep.stop_reason = "tolerance";
+        break;
+      }
+      ScopeTimer st("pass");
+      MatrixXd next = moser_grid_pass(target, UV, F, side_mask, w, opt.grid_resolution, opt.smoothing_cells, opt.rk4_steps);
+      const Stats s = vertex_stats(vertex_log_ratio(target, next, F, nv));
+      ++rep.iterations;
+      rep.history_mean.push_back(s.mean);
+      std::ostringstream msg;
+      msg << "pass " << pass + 1 << ": per-vertex mean |ln ratio| " << s.mean << ", p99 " << s.p99;
+      report(progress, "flow", double(pass + 1) / opt.max_passes, msg.str());
+      if (!(s.mean < cur.mean)) {
+        rep.stop_reason = "no improvement";
+        break;
+      }
+      UV = std::move(next);
+      cur = s;
+    }
+    if (met(cur)) rep.stop_reason = "tolerance";
+  }
+
+  const VectorXd vertex_target = vertex_share(target, F, nv);
+  auto stats_of = [&](const MatrixXd& uv) { return vertex_stats(vertex_log_ratio(target, uv, F, nv)); };
+
+  if (opt.method == FlowMethod::Mesh) {
+    // DLF Algorithm 1 on a flowing copy of the connectivity (Delaunay flips), or Zou's fixed-K
+    // schedule (eq. 19) when fixed_steps > 0.
+    MatrixXi Fd = F;
+    const int steps = opt.fixed_steps > 0 ? opt.fixed_steps : opt.max_iterations;
+    rep.stop_reason = "iteration limit";
+    for (int k = 0; k < steps; ++k) {
+      if (opt.fixed_steps <= 0 && met(cur)) {
+        rep.stop_reason = "tolerance";
+        break;
+      }
+      if (opt.delaunay_flips) rep.edge_flips += delaunay_flip(UV, Fd);
+      const double fraction = opt.fixed_steps > 0 ? 1.0 / (opt.fixed_steps - k) : 1.0;
+      const MatrixXd D = lie_displacement(UV, Fd, vertex_target, fraction, side_mask);
+      const double lambda = opt.fixed_steps > 0 ? std::min(1.0, adaptive_step(UV, Fd, D, 1.0) < 1.0 ? opt.theta * adaptive_step(UV, Fd, D, 1.0) : 1.0)
+                                                : adaptive_step(UV, Fd, D, opt.theta);
+      if (!(lambda > 1e-12)) {
+        rep.stop_reason = "step vanished";
+        break;
+      }
+      apply_displacement(UV, D, lambda, side_mask, w);
+      cur = stats_of(UV);
+      ++rep.iterations;
+      rep.history_mean.push_back(cur.mean);
+      std::ostringstream msg;
+      msg << "step " << k + 1 << " (lambda " << lambda << "): per-vertex mean |ln ratio| " << cur.mean << ", p99 " << cur.p99;
+      report(progress, "flow", double(k + 1) / steps, msg.str());
+    }
+    if (met(cur)) rep.stop_reason = "tolerance";
+  }
+
+  // Flips on the output connectivity (the grid flow is a diffeomorphism only up to its
+  // discretisation; the mesh method flows on flipped connectivity): re-place them.
+  int remaining = 0;
+  { ScopeTimer st("repair"); rep.repaired = repair_flips(V, F, side_mask, w, UV, &remaining); }
+  if (rep.repaired > 0) cur = stats_of(UV);
+
+  // Polish: mesh Lie steps on the output connectivity with per-vertex flip-preventing steps,
+  // kept while they lower the per-vertex error.
+  if (opt.polish && opt.method == FlowMethod::Grid && remaining == 0) {
+    for (int k = 0; k < opt.polish_iterations && !met(cur); ++k) {
+      ScopeTimer st("polish it");
+      const MatrixXd D = lie_displacement(UV, F, vertex_target, 1.0, side_mask);
+      MatrixXd next = local_step_positions(UV, F, D, opt.theta, side_mask, w, min_area);
+      const Stats s = stats_of(next);
+      if (!(s.mean < cur.mean) || !(s.p99 <= cur.p99 * 1.01)) break;
+      UV = std::move(next);
+      cur = s;
+      ++rep.polish_iterations;
+      std::ostringstream msg;
+      msg << "polish " << k + 1 << ": per-vertex mean |ln ratio| " << cur.mean << ", p99 " << cur.p99;
+      report(progress, "flow", -1, msg.str());
+    }
+    if (met(cur)) rep.stop_reason = "tolerance";
+  }
+
+  rep.flips = count_flipped(UV, F, min_area);
+  rep.converged = met(cur);
+  rep.final_vertex_mean = cur.mean;
+  rep.final_vertex_p99 = cur.p99;
+  rep.final_vertex_max = cur.max;
+  res.UV = std::move(UV);
+  return res;
+}
+
+}  // namespace authalic

@@ -1,0 +1,124 @@
+#pragma once
+// Area-restoring flows on the rectangle [0, W] x [0, 1]: from an initial map UV of a disk mesh
+// (e.g. core/conformal_map.h) to an authalic (area-preserving) or measure-controlled one.
+//
+// Theory (Zou et al. 2011, seed 000 section 3, eq. 2-10; Moser's construction as in Dominitz &
+// Tannenbaum, seed 001 section 4.2): let ρ be the density of the surface measure pushed to the
+// domain by the current map (surface area / domain area, normalised to mean 1). With
+// ρ_t = (1 − t) ρ + t, the continuity equation ∂ρ_t/∂t + div(ρ_t v_t) = 0 is solved by
+//     Δg = ρ − 1 (Neumann: ∂g/∂n = 0 on the sides),   v_t = ∇g / ((1 − t) ρ + t),
+// (eq. 9-10 with h_M = 1, h_Ω = ρ, written in the fixed frame of the domain). Moving every vertex
+// along dx/dt = v_t(x) for t in [0, 1] carries the measure ρ dx onto the uniform measure, so the
+// new map is area-preserving up to discretisation; the pass is repeated on the new map.
+//
+// Methods:
+//  - Grid (default; issue 3, "a formulation that works"): ρ is rasterised area-weighted onto a
+//    regular grid (exact triangle/cell clipping), lightly smoothed, the Poisson problem is solved
+//    by DCT (core/poisson_dct.h, exact Neumann: the normal velocity vanishes on the sides, so
+//    boundary vertices slide along their side and corners stay), vertices are moved by RK4 with
+//    bilinear interpolation of ∇g and ρ. Passes repeat until the per-vertex area ratio meets the
+//    tolerance or the pass budget is spent.
+//  - Mesh (DLF, seed 004 Algorithm 1; seed 000 Algorithm 1): Δg = h_Ω − h_M with the cotangent
+//    Laplacian of the flowing domain mesh after Delaunay edge flips, Neumann condition (DLF eq. 3),
+//    vertex gradients by the angle-weighted mean of face gradients (seed 000 eq. 16), displacement
+//    λ ∇g with the adaptive flip-preventing step λ = θ min_t λ_t* (DLF eq. 5) or Zou's fixed-K
+//    schedule (seed 000 eq. 19), boundary vertices sliding along their side, corners fixed.
+//  - Polish (after Grid, on by default): the mesh step on the output connectivity with the
+//    per-vertex target, applied only while it lowers the per-vertex error without flipping.
+// Measure control (DLF section 5.5): an optional per-vertex density multiplies the surface area
+// element, so a region of density 2 receives twice its natural share of the domain.
+#include <string>
+#include <vector>
+
+#include "core/mesh.h"
+#include "core/progress.h"
+
+namespace authalic {
+
+enum class FlowMethod { Grid, Mesh };
+std::string to_string(FlowMethod m);
+
+struct FlowOptions {
+  FlowMethod method = FlowMethod::Grid;
+  double width = 1.0;  // the domain is [0, W] x [0, 1]
+  // Optional per-vertex density (#V, > 0): target domain area ∝ density x surface area.
+  VectorXd density;
+
+  // Stopping rule (both methods): per-vertex |ln area ratio| mean <= tolerance_mean and 99th
+  // percentile <= tolerance_p99; or no further improvement; or the iteration budget is spent.
+  double tolerance_mean = 0.004;
+  double tolerance_p99 = 0.02;
+
+  // Grid method.
+  int grid_resolution = 512;     // cells along the unit side (nx = round(W * resolution), ny = resolution)
+  int rk4_steps = 40;            // RK4 steps over t in [0, 1] per pass
+  int max_passes = 6;
+  double smoothing_cells = 1.0;  // Gaussian standard deviation of the density smoothing, in cells
+  bool polish = true;            // finish with mesh steps on the output connectivity
+
+  // Mesh method (and polish).
+  int max_iterations = 200;      // mesh steps (Mesh method); polish uses polish_iterations
+  int polish_iterations = 30;
+  double theta = 0.5;            // fraction of the critical flip-preventing step (DLF eq. 5)
+  int fixed_steps = 0;           // > 0: Zou's fixed-K schedule (eq. 19) with K = fixed_steps steps
+  bool delaunay_flips = true;    // Delaunay edge flips of the flowing domain mesh (Mesh method)
+};
+
+struct FlowReport {
+  FlowMethod method = FlowMethod::Grid;
+  int iterations = 0;            // passes (Grid) or steps (Mesh)
+  int polish_iterations = 0;
+  bool converged = false;        // met the tolerance
+  std::string stop_reason;       // "tolerance", "no improvement", "iteration limit", "step vanished"
+  int flips = 0;                 // flipped triangles of the returned map (output connectivity)
+  int repaired = 0;              // vertices re-placed to remove flips
+  int edge_flips = 0;            // Delaunay edge flips performed (Mesh method)
+  // Per-vertex |ln area ratio| (density-weighted target) before and after.
+  double initial_vertex_mean = 0, initial_vertex_p99 = 0;
+  double final_vertex_mean = 0, final_vertex_p99 = 0, final_vertex_max = 0;
+  std::vector<double> history_mean;  // per iteration: per-vertex mean |ln ratio|
+};
+
+struct FlowResult {
+  MatrixXd UV;   // #V x 2
+  FlowReport report;
+};
+
+// The flow described above. V: #V x 3 surface (mm), F: #F x 3 faces of a disk, UV0: #V x 2
+// initial map into [0, W] x [0, 1] without flipped triangles, side_mask: #V RectangleSide bits
+// (core/conformal_map.h) of the boundary vertices (0 for interior and unused vertices; a vertex
+// with two bits is a corner and stays fixed). Deterministic for any thread count.
+FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& UV0, const VectorXi& side_mask,
+                         const FlowOptions& options, const ProgressFn& progress = {});
+
+// ---- building blocks (exposed for tests and for the sphere/rectangle maps) -----------------
+
+// Target per-face "surface" measure: 3D area times the mean density of its corners (density
+// empty = plain area), scaled so it sums to `total`.
+VectorXd target_face_measure(const MatrixXd& V, const MatrixXi& F, const VectorXd& density, double total);
+
+// Per-vertex ln(target / domain) of barycentric vertex areas, both normalised to equal totals;
+// NaN for unused vertices.
+VectorXd vertex_log_ratio(const VectorXd& face_target, const MatrixXd& UV, const MatrixXi& F, int num_vertices);
+
+// One Moser pass on the grid: rasterise, smooth, solve, advect (RK4). Returns the moved UV.
+MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const MatrixXi& F, const VectorXi& side_mask,
+                         double width, int resolution, double smoothing_cells, int rk4_steps);
+
+// Largest λ > 0 such that moving the triangle's vertices p_i + s d_i keeps it positively oriented
+// for all s in [0, λ) (DLF section 5.4: the smallest positive root of the quadratic signed area);
+// +inf if it never degenerates.
+double critical_step(const Eigen::Vector2d p[3], const Eigen::Vector2d d[3]);
+
+// Removes flipped triangles by re-placing the vertices around them: the vertices of flipped
+// faces (growing by rings while needed) are set to the mean-value-weighted average of their
+// neighbours with everything else fixed (DLF section 5.1: "an affine combination of the good
+// vertices nearby"). Returns the number of vertices moved; *remaining = flips left.
+int repair_flips(const MatrixXd& V, const MatrixXi& F, const VectorXi& side_mask, double width, MatrixXd& UV,
+                 int* remaining = nullptr);
+
+// Delaunay edge flips (planar, interior edges) until every interior edge is locally Delaunay or
+// max_flips is reached; F is changed in place. Returns the number of flips.
+int delaunay_flip(const MatrixXd& UV, MatrixXi& F, int max_flips = -1);
+
+}  // namespace authalic

@@ -1,0 +1,455 @@
+// Initial map of a disk onto the rectangle [0, W] x [0, 1]: arc-length boundary, corner and ear
+// splits, harmonic (cotangent = LSCM with fixed boundary) interior with fallbacks. See
+// core/conformal_map.h; seed 000 (Zou et al. 2011) section 4.1.
+#include "core/conformal_map.h"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+namespace authalic {
+
+namespace {
+
+double perimeter(double width) { return 2.0 * width + 2.0; }
+
+// Perimeter coordinates of the four corners (0,0), (W,0), (W,1), (0,1) and the side bits each carries.
+std::array<double, 4> corner_coordinates(double w) { return {0.0, w, w + 1.0, 2.0 * w + 1.0}; }
+constexpr std::array<int, 4> kCornerSides = {kSideBottom | kSideLeft, kSideBottom | kSideRight, kSideRight | kSideTop,
+                                             kSideTop | kSideLeft};
+
+double wrap_perimeter(double s, double w) {
+  const double p = perimeter(w);
+  s = std::fmod(s, p);
+  if (s < 0) s += p;
+  return s;
+}
+
+int side_of(double s, double w) {
+  s = wrap_perimeter(s, w);
+  if (s < w) return kSideBottom;
+  if (s < w + 1.0) return kSideRight;
+  if (s < 2.0 * w + 1.0) return kSideTop;
+  return kSideLeft;
+}
+
+Eigen::Vector3d row3(const MatrixXd& V, int i) { return V.row(i).head<3>().transpose(); }
+
+using Face = std::array<int, 3>;
+
+}  // namespace
+
+std::string to_string(HarmonicWeights w) {
+  switch (w) {
+    case HarmonicWeights::Cotangent: return "cotangent";
+    case HarmonicWeights::MeanValue: return "mean-value";
+    case HarmonicWeights::Uniform: return "uniform";
+  }
+  return "unknown";
+}
+
+Eigen::Vector2d rectangle_perimeter_point(double s, double width) {
+  const double w = width;
+  s = wrap_perimeter(s, w);
+  if (s < w) return {s, 0.0};
+  if (s < w + 1.0) return {w, s - w};
+  if (s < 2.0 * w + 1.0) return {w - (s - w - 1.0), 1.0};
+  return {0.0, 1.0 - (s - 2.0 * w - 1.0)};
+}
+
+int count_flipped(const MatrixXd& UV, const MatrixXi& F, double min_area) {
+  const VectorXd a = signed_face_areas_2d(UV, F);
+  int n = 0;
+  for (Eigen::Index f = 0; f < a.size(); ++f)
+    if (!(a[f] > min_area)) ++n;
+  return n;
+}
+
+namespace {
+
+// Harmonic functions (one per column of fixed_values) with the Dirichlet data fixed_values on
+// the vertices `fixed`; other used vertices free (natural Neumann condition on free boundary
+// vertices). Unused vertices get 0.
+MatrixXd solve_harmonic(const MatrixXd& V, const MatrixXi& F, const std::vector<int>& fixed, const MatrixXd& fixed_uv,
+                        HarmonicWeights weights) {
+  const int nv = static_cast<int>(V.rows());
+  const Eigen::Index cols = fixed_uv.cols();
+  MatrixXd UV = MatrixXd::Zero(nv, cols);
+  std::vector<int> index(nv, -2);  // -2 unused, -1 fixed, >= 0 unknown number
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) index[F(f, c)] = 0;
+  for (size_t k = 0; k < fixed.size(); ++k) {
+    index[fixed[k]] = -1;
+    UV.row(fixed[k]) = fixed_uv.row(k);
+  }
+  int n = 0;
+  for (int v = 0; v < nv; ++v)
+    if (index[v] == 0) index[v] = n++;
+  if (n == 0) return UV;
+
+  // Weighted graph Laplacian rows w_ij(u_i − u_j) = 0 for the unknowns, as triplets (i, j, w_ij).
+  std::vector<Eigen::Triplet<double>> w;
+  w.reserve(static_cast<size_t>(F.rows()) * 6);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    std::array<Eigen::Vector3d, 3> p;
+    for (int c = 0; c < 3; ++c) p[c] = row3(V, F(f, c));
+    for (int c = 0; c < 3; ++c) {
+      const int i = F(f, c), j = F(f, (c + 1) % 3), k = F(f, (c + 2) % 3);
+      const Eigen::Vector3d e1 = p[(c + 1) % 3] - p[c], e2 = p[(c + 2) % 3] - p[c];
+      const double cr = e1.cross(e2).norm(), dt = e1.dot(e2);
+      switch (weights) {
+        case HarmonicWeights::Cotangent: {
+          // Angle at corner i is opposite edge (j, k): contributes cot/2 to w_jk = w_kj.
+          const double cot = dt / std::max(cr, 1e-300);
+          w.emplace_back(j, k, 0.5 * cot);
+          w.emplace_back(k, j, 0.5 * cot);
+          break;
+        }
+        case HarmonicWeights::MeanValue: {
+          // Floater 2003: w_ij = (tan(α_1/2) + tan(α_2/2)) / |v_j − v_i|, α the angles at v_i
+          // beside edge ij. tan(α/2) = |e1 x e2| / (|e1||e2| + e1.e2).
+          const double l1 = e1.norm(), l2 = e2.norm();
+          const double t = cr / std::max(l1 * l2 + dt, 1e-300);
+          w.emplace_back(i, j, t / std::max(l1, 1e-300));
+          w.emplace_back(i, k, t / std::max(l2, 1e-300));
+          break;
+        }
+        case HarmonicWeights::Uniform:
+          // Each half-edge once: interior edges get 1 from each side, boundary edges 1/2 (only
+          // boundary-boundary pairs, which are fixed anyway).
+          w.emplace_back(i, j, 0.5);
+          w.emplace_back(j, i, 0.5);
+          break;
+      }
+    }
+  }
+  SparseMatrix W(nv, nv);
+  W.setFromTriplets(w.begin(), w.end());
+
+  std::vector<Eigen::Triplet<double>> a;
+  a.reserve(W.nonZeros() + n);
+  MatrixXd rhs = MatrixXd::Zero(n, cols);
+  VectorXd diag = VectorXd::Zero(n);
+  for (int col = 0; col < W.outerSize(); ++col)
+    for (SparseMatrix::InnerIterator it(W, col); it; ++it) {
+      // Entry (row i, column j) = w_ij.
+      const int i = static_cast<int>(it.row()), j = static_cast<int>(it.col());
+      if (index[i] < 0 || i == j) continue;
+      diag[index[i]] += it.value();
+      if (index[j] >= 0)
+        a.emplace_back(index[i], index[j], -it.value());
+      else
+        rhs.row(index[i]) += it.value() * UV.row(j);
+    }
+  for (int i = 0; i < n; ++i) a.emplace_back(i, i, diag[i]);
+  SparseMatrix A(n, n);
+  A.setFromTriplets(a.begin(), a.end());
+  MatrixXd x;
+  if (weights == HarmonicWeights::Cotangent) {
+    // The cotangent matrix is the P1 stiffness matrix: positive definite with a Dirichlet
+    // boundary whatever the triangle shapes, so a Cholesky factorisation applies.
+    Eigen::SimplicialLDLT<SparseMatrix> solver(A);
+    if (solver.info() != Eigen::Success) throw std::runtime_error("harmonic_map: cotangent factorisation failed");
+    x = solver.solve(rhs);
+  } else {
+    Eigen::SparseLU<SparseMatrix> solver;
+    solver.analyzePattern(A);
+    solver.factorize(A);
+    if (solver.info() != Eigen::Success) throw std::runtime_error("harmonic_map: factorisation failed");
+    x = solver.solve(rhs);
+  }
+  for (int v = 0; v < nv; ++v)
+    if (index[v] >= 0) UV.row(v) = x.row(index[v]);
+  return UV;
+}
+
+}  // namespace
+
+MatrixXd harmonic_map(const MatrixXd& V, const MatrixXi& F, const std::vector<int>& fixed, const MatrixXd& fixed_uv,
+                      HarmonicWeights weights) {
+  return solve_harmonic(V, F, fixed, fixed_uv.leftCols(2), weights);
+}
+
+MatrixXd sliding_harmonic_map(const MatrixXd& V, const MatrixXi& F, const VectorXi& side_mask, double width,
+                              const MatrixXd& UV, int pinned, HarmonicWeights weights) {
+  // u: Dirichlet on the left/right sides (0, W), free on the bottom/top sides; v: Dirichlet on
+  // the bottom/top sides (0, 1), free on the left/right sides. Corners carry both bits.
+  std::vector<int> fu, fv;
+  for (Eigen::Index v = 0; v < side_mask.size(); ++v) {
+    const int m = side_mask[v];
+    if ((m & (kSideLeft | kSideRight)) || v == pinned) fu.push_back(static_cast<int>(v));
+    if ((m & (kSideBottom | kSideTop)) || v == pinned) fv.push_back(static_cast<int>(v));
+  }
+  MatrixXd bu(fu.size(), 1), bv(fv.size(), 1);
+  for (size_t k = 0; k < fu.size(); ++k) bu(k, 0) = UV(fu[k], 0);
+  for (size_t k = 0; k < fv.size(); ++k) bv(k, 0) = UV(fv[k], 1);
+  MatrixXd out(V.rows(), 2);
+  out.col(0) = solve_harmonic(V, F, fu, bu, weights).col(0);
+  out.col(1) = solve_harmonic(V, F, fv, bv, weights).col(0);
+  (void)width;
+  return out;
+}
+
+ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F, const RectangleBoundaryMap& opt) {
+  const int nv = static_cast<int>(V.rows());
+  const double w = opt.width;
+  if (!(w > 0)) throw std::invalid_argument("conformal_rectangle_map: the rectangle width must be positive");
+  if (V.cols() < 3) throw std::invalid_argument("conformal_rectangle_map: V must have 3 columns");
+  // Cheap disk check (one boundary loop, Euler characteristic 1); the full report only to explain a refusal.
+  const auto loops = boundary_loops(F, nv);
+  {
+    const EdgeTopology et = edge_topology(F, nv);
+    std::vector<char> used(nv, 0);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) used[F(f, c)] = 1;
+    int nused = 0;
+    for (char u : used) nused += u;
+    bool manifold = true;
+    for (const auto& ef : et.edge_faces) manifold = manifold && ef.size() <= 2;
+    if (loops.size() != 1 || !manifold || nused - et.E.rows() + F.rows() != 1) {
+      const TopologyReport topo = analyze_topology(V, F);
+      if (!topo.is_disk())
+        throw std::invalid_argument("conformal_rectangle_map: the mesh is not a disk (" + topo.summary() + ")");
+    }
+  }
+  std::vector<int> loop = loops.front();
+  const int nb = static_cast<int>(loop.size());
+  if (nb < 3) throw std::invalid_argument("conformal_rectangle_map: boundary loop shorter than 3 vertices");
+  if (opt.anchor_vertex >= 0) {
+    auto it = std::find(loop.begin(), loop.end(), opt.anchor_vertex);
+    if (it == loop.end()) throw std::invalid_argument("conformal_rectangle_map: the anchor vertex is not on the boundary");
+    std::rotate(loop.begin(), it, loop.end());
+  }
+
+  // Arc-length perimeter coordinates, unwrapped: s[0] = anchor position, increasing by P * l / L.
+  const double P = perimeter(w);
+  std::vector<double> s(nb + 1);
+  double total = 0;
+  for (int i = 0; i < nb; ++i) total += (row3(V, loop[(i + 1) % nb]) - row3(V, loop[i])).norm();
+  if (!(total > 0)) throw std::invalid_argument("conformal_rectangle_map: the boundary has zero length");
+  s[0] = opt.anchor_position;
+  for (int i = 0; i < nb; ++i) s[i + 1] = s[i] + P * (row3(V, loop[(i + 1) % nb]) - row3(V, loop[i])).norm() / total;
+  s[nb] = s[0] + P;  // exact closure
+
+  // Corners in unwrapped coordinates within [s0, s0 + P): find each one's boundary edge.
+  const auto corners = corner_coordinates(w);
+  std::vector<int> corner_of(nb, -1);                       // boundary position -> corner id (snapped)
+  std::vector<std::vector<std::pair<double, int>>> inserted(nb);  // per edge i: (unwrapped s, corner id)
+  ConformalMapResult R;
+  for (int c = 0; c < 4; ++c) {
+    double cu = corners[c];
+    cu += P * std::ceil((s[0] - cu) / P);  // smallest c + kP >= s0
+    if (cu >= s[0] + P) cu -= P;
+    int i = static_cast<int>(std::upper_bound(s.begin(), s.end(), cu) - s.begin()) - 1;
+    i = std::clamp(i, 0, nb - 1);
+    const double len = s[i + 1] - s[i];
+    const double prev_len = s[i] - s[(i + nb - 1) % nb] + (i == 0 ? P : 0.0);
+    const double next_len = s[(i + 2 <= nb ? i + 2 : 1)] - s[i + 1] + (i + 2 > nb ? P : 0.0);
+    const double d0 = cu - s[i], d1 = s[i + 1] - cu;
+    const int j = (i + 1) % nb;
+    if (d0 <= opt.corner_snap * std::min(len, prev_len) && corner_of[i] < 0) {
+      corner_of[i] = c;
+    } else if (d1 <= opt.corner_snap * std::min(len, next_len) && corner_of[j] < 0) {
+      corner_of[j] = c;
+    } else {
+      inserted[i].push_back({cu, c});
+    }
+  }
+  for (auto& v : inserted) std::sort(v.begin(), v.end());
+
+  // Output vertices: the input's, then inserted corner vertices, then ear-split midpoints.
+  std::vector<Eigen::Vector3d> extra;
+  std::vector<Eigen::Vector2d> extra_uv;
+  std::vector<int> extra_side;
+  std::vector<double> vertex_s(nv, 0.0);
+  std::vector<int> side(nv, 0);
+  MatrixXd boundary_uv_in(nb, 2);
+  for (int i = 0; i < nb; ++i) {
+    const int v = loop[i];
+    if (corner_of[i] >= 0) {
+      side[v] = kCornerSides[corner_of[i]];
+      vertex_s[v] = corners[corner_of[i]];
+      ++R.corners_snapped;
+    } else {
+      side[v] = side_of(s[i], w);
+      vertex_s[v] = s[i];
+    }
+  }
+
+  // The faces of the (at most a few) boundary edges that receive corner vertices.
+  std::map<std::pair<int, int>, int> halfedge_face;
+  for (int i = 0; i < nb; ++i)
+    if (!inserted[i].empty()) halfedge_face[{loop[i], loop[(i + 1) % nb]}] = -1;
+  if (!halfedge_face.empty())
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        auto it = halfedge_face.find({F(f, c), F(f, (c + 1) % 3)});
+        if (it != halfedge_face.end()) it->second = static_cast<int>(f);
+      }
+
+  // Stage 1 faces (corner splits): each input face's pieces, in input order.
+  std::vector<std::vector<Face>> pieces(F.rows());
+  for (Eigen::Index f = 0; f < F.rows(); ++f) pieces[f].push_back({F(f, 0), F(f, 1), F(f, 2)});
+  std::vector<int> final_loop;
+  for (int i = 0; i < nb; ++i) {
+    const int a = loop[i], b = loop[(i + 1) % nb];
+    final_loop.push_back(a);
+    if (inserted[i].empty()) continue;
+    const int f = halfedge_face.at({a, b});
+    const Face orig = pieces[f].front();
+    int x = -1;
+    for (int c = 0; c < 3; ++c)
+      if (orig[c] != a && orig[c] != b) x = orig[c];
+    std::vector<int> chain{a};
+    for (const auto& [cu, c] : inserted[i]) {
+      const double t = (cu - s[i]) / (s[i + 1] - s[i]);
+      extra.push_back((1 - t) * row3(V, a) + t * row3(V, b));
+      extra_uv.push_back(rectangle_perimeter_point(corners[c], w));
+      extra_side.push_back(kCornerSides[c]);
+      const int id = nv + static_cast<int>(extra.size()) - 1;
+      chain.push_back(id);
+      final_loop.push_back(id);
+      ++R.corner_vertices_inserted;
+    }
+    chain.push_back(b);
+    pieces[f].clear();
+    for (size_t k = 0; k + 1 < chain.size(); ++k) pieces[f].push_back({chain[k], chain[k + 1], x});
+  }
+
+  // Side masks over all vertices so far.
+  const int n1 = nv + static_cast<int>(extra.size());
+  std::vector<int> mask(n1, 0);
+  for (int v = 0; v < nv; ++v) mask[v] = side[v];
+  for (size_t k = 0; k < extra.size(); ++k) mask[nv + k] = extra_side[k];
+
+  MatrixXi F1;
+  std::vector<int> origin1;
+  {
+    size_t count = 0;
+    for (const auto& p : pieces) count += p.size();
+    F1.resize(static_cast<Eigen::Index>(count), 3);
+    Eigen::Index r = 0;
+    for (size_t f = 0; f < pieces.size(); ++f)
+      for (const Face& t : pieces[f]) {
+        F1.row(r++) << t[0], t[1], t[2];
+        origin1.push_back(static_cast<int>(f));
+      }
+  }
+
+  // Stage 2 (ear splits): interior edges whose endpoints share a side.
+  const EdgeTopology topo1 = edge_topology(F1, n1);
+  std::vector<int> mid(topo1.E.rows(), -1);
+  std::vector<Eigen::Vector3d> all_pos(n1);
+  for (int v = 0; v < nv; ++v) all_pos[v] = row3(V, v);
+  for (size_t k = 0; k < extra.size(); ++k) all_pos[nv + k] = extra[k];
+  for (Eigen::Index e = 0; e < topo1.E.rows(); ++e) {
+    const int a = topo1.E(e, 0), b = topo1.E(e, 1);
+    if (topo1.edge_faces[e].size() == 2 && (mask[a] & mask[b]) != 0) {
+      mid[e] = static_cast<int>(all_pos.size());
+      all_pos.push_back(0.5 * (all_pos[a] + all_pos[b]));
+      ++R.edges_split;
+    }
+  }
+  std::vector<Face> out_faces;
+  std::vector<int> out_origin;
+  out_faces.reserve(F1.rows() + 3 * R.edges_split);
+  for (Eigen::Index f = 0; f < F1.rows(); ++f) {
+    const int v[3] = {F1(f, 0), F1(f, 1), F1(f, 2)};
+    const int m[3] = {mid[topo1.FE(f, 0)], mid[topo1.FE(f, 1)], mid[topo1.FE(f, 2)]};  // m[c] on the edge opposite corner c
+    const int nsplit = (m[0] >= 0) + (m[1] >= 0) + (m[2] >= 0);
+    auto emit = [&](int a, int b, int c) {
+      out_faces.push_back({a, b, c});
+      out_origin.push_back(origin1[f]);
+    };
+    if (nsplit == 0) {
+      emit(v[0], v[1], v[2]);
+    } else if (nsplit == 1) {
+      int c = 0;
+      while (m[c] < 0) ++c;
+      emit(v[c], v[(c + 1) % 3], m[c]);
+      emit(v[c], m[c], v[(c + 2) % 3]);
+    } else if (nsplit == 2) {
+      int c = 0;  // the corner opposite the unsplit edge
+      while (m[c] >= 0) ++c;
+      const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+      // m[c2] lies on edge (v_c, v_c1), m[c1] on edge (v_c2, v_c).
+      emit(v[c], m[c2], m[c1]);
+      // Quad (m[c2], v_c1, v_c2, m[c1]): cut along its shorter diagonal.
+      const double d1 = (all_pos[m[c2]] - all_pos[v[c2]]).norm(), d2 = (all_pos[v[c1]] - all_pos[m[c1]]).norm();
+      if (d1 <= d2) {
+        emit(m[c2], v[c1], v[c2]);
+        emit(m[c2], v[c2], m[c1]);
+      } else {
+        emit(v[c1], v[c2], m[c1]);
+        emit(v[c1], m[c1], m[c2]);
+      }
+    } else {
+      emit(v[0], m[2], m[1]);
+      emit(v[1], m[0], m[2]);
+      emit(v[2], m[1], m[0]);
+      emit(m[0], m[1], m[2]);
+    }
+  }
+
+  // Assemble the result.
+  const int ntot = static_cast<int>(all_pos.size());
+  R.num_input_vertices = nv;
+  R.width = w;
+  R.V.resize(ntot, 3);
+  for (int v = 0; v < ntot; ++v) R.V.row(v) = all_pos[v].transpose();
+  R.F.resize(static_cast<Eigen::Index>(out_faces.size()), 3);
+  R.face_origin.resize(static_cast<Eigen::Index>(out_faces.size()));
+  for (size_t f = 0; f < out_faces.size(); ++f) {
+    R.F.row(f) << out_faces[f][0], out_faces[f][1], out_faces[f][2];
+    R.face_origin[f] = out_origin[f];
+  }
+  R.side_mask = VectorXi::Zero(ntot);
+  for (int v = 0; v < n1; ++v) R.side_mask[v] = mask[v];
+  R.boundary = final_loop;
+
+  // Dirichlet data: the boundary's perimeter points.
+  MatrixXd buv(final_loop.size(), 2);
+  for (size_t k = 0; k < final_loop.size(); ++k) {
+    const int v = final_loop[k];
+    buv.row(k) = v < nv ? rectangle_perimeter_point(vertex_s[v], w).transpose() : extra_uv[v - nv].transpose();
+  }
+
+  // Flipped or degenerate: signed area below a tiny fraction of the mean triangle area.
+  const double min_area = 1e-12 * w / std::max<Eigen::Index>(1, R.F.rows());
+  R.weights = HarmonicWeights::Cotangent;
+  R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::Cotangent);
+  if (opt.sliding_boundary) {
+    // Least-squares conformal map with the boundary vertices free to slide along their sides
+    // (corners and the anchor fixed): the area term of LSCM is constant on this constraint set,
+    // so it is the Dirichlet energy of u and v separately, each with mixed boundary conditions.
+    const int pinned = opt.anchor_vertex >= 0 ? opt.anchor_vertex : -1;
+    for (HarmonicWeights hw : {HarmonicWeights::Cotangent, HarmonicWeights::MeanValue}) {
+      MatrixXd slid = sliding_harmonic_map(R.V, R.F, R.side_mask, w, R.UV, pinned, hw);
+      bool inside = true;
+      for (int v : final_loop) inside = inside && slid(v, 0) >= 0 && slid(v, 0) <= w && slid(v, 1) >= 0 && slid(v, 1) <= 1;
+      if (inside && count_flipped(slid, R.F, min_area) == 0) {
+        R.UV = std::move(slid);
+        R.sliding = true;
+        R.weights = hw;
+        return R;
+      }
+    }
+  }
+  R.cotangent_flips = count_flipped(R.UV, R.F, min_area);
+  if (R.cotangent_flips > 0) {
+    R.weights = HarmonicWeights::MeanValue;
+    R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::MeanValue);
+    if (count_flipped(R.UV, R.F, min_area) > 0) {
+      R.weights = HarmonicWeights::Uniform;
+      R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::Uniform);
+    }
+  }
+  return R;
+}
+
+}  // namespace authalic

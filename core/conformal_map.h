@@ -1,0 +1,96 @@
+#pragma once
+// Initial (conformal) map of a disk-topology mesh onto a rectangle [0, W] x [0, 1] (W = 1: the
+// unit square of Zou et al. 2011, seed 000 section 4.1; W = 2: the whole-brain 1:2 rectangle of
+// seed 003 section 3.4).
+//
+// 1. The boundary loop is laid isometrically on the rectangle's perimeter: each boundary edge gets
+//    a share of the perimeter proportional to its 3D length, starting with a chosen anchor vertex
+//    at a chosen perimeter position, in the loop's orientation (interior on the left, so a mesh
+//    oriented counter-clockwise seen from outside maps counter-clockwise: no mirror).
+// 2. Corner splits (section 4.1): a boundary edge that spans a corner of the rectangle is broken
+//    by a vertex placed exactly on the corner (its 3D position interpolated along the edge by arc
+//    length), splitting the incident triangle in two.
+// 3. Ear splits (section 4.1, generalised): every interior edge whose two endpoints lie on the
+//    same side would be flattened onto that side (a "dividing edge" in Floater's sense: a triangle
+//    with all three vertices on one side, or a chord cutting off a collapsed part). Each such edge
+//    is split at its 3D midpoint, which becomes an interior vertex; triangles with 1, 2 or 3 split
+//    edges become 2, 3 or 4 triangles. No triangle of the result has three collinear vertices.
+// 4. Interior: the harmonic map with this Dirichlet boundary. With the whole boundary fixed, the
+//    least-squares conformal map (Lévy et al. 2002, seed 000 ref. [24]) has the same minimiser as
+//    the cotangent-weighted harmonic map (its area term depends on the boundary only), so the
+//    cotangent system is solved. Cotangent weights can be negative on obtuse 3D triangles and
+//    then may flip a triangle; if any triangle is flipped or degenerate, the map is recomputed
+//    with Floater's mean-value weights (positive, so Tutte/Floater guarantees an embedding on the
+//    convex rectangle once dividing edges are split), and with uniform weights as a last resort.
+#include <string>
+#include <vector>
+
+#include "core/mesh.h"
+
+namespace authalic {
+
+// Rectangle perimeter coordinate: s in [0, 2W + 2), counter-clockwise from the corner (0, 0):
+// bottom side s in [0, W), right side [W, W + 1), top side [W + 1, 2W + 1) (from x = W to x = 0),
+// left side [2W + 1, 2W + 2). Values outside the range wrap around.
+Eigen::Vector2d rectangle_perimeter_point(double s, double width);
+// Perimeter coordinate of the middle of the top side, (W/2, 1).
+inline double rectangle_top_middle(double width) { return 1.5 * width + 1.0; }
+
+// Side bits of a boundary vertex (corners carry two).
+enum RectangleSide : int { kSideBottom = 1, kSideRight = 2, kSideTop = 4, kSideLeft = 8 };
+
+enum class HarmonicWeights { Cotangent, MeanValue, Uniform };
+std::string to_string(HarmonicWeights w);
+
+struct RectangleBoundaryMap {
+  double width = 1.0;        // W: the rectangle is [0, W] x [0, 1]
+  int anchor_vertex = -1;    // boundary vertex (input index) placed at anchor_position; -1 = any
+  double anchor_position = 0.0;  // perimeter coordinate of the anchor
+  // A boundary vertex closer to a corner than this fraction of its shorter incident boundary
+  // edge is moved onto the corner instead of inserting a near-duplicate vertex there.
+  double corner_snap = 0.05;
+  // After the arc-length map, let the boundary vertices slide along their sides (corners and the
+  // anchor fixed) and take the least-squares conformal map on that constraint set, if it has no
+  // flipped triangle. Removes the non-conformal boundary layer that arc-length spacing imposes.
+  bool sliding_boundary = false;
+};
+
+struct ConformalMapResult {
+  MatrixXd V;   // #V' x 3: the input vertices (same order), then the inserted ones
+  MatrixXi F;   // #F' x 3: the input faces, split ones replaced by their pieces
+  MatrixXd UV;  // #V' x 2 in [0, W] x [0, 1]; vertices used by no face get (0, 0)
+  VectorXi face_origin;     // #F': the input face each face is (a piece of)
+  std::vector<int> boundary;  // boundary loop of F' (counter-clockwise on the rectangle)
+  VectorXi side_mask;       // #V': RectangleSide bits of boundary vertices, 0 elsewhere
+  int num_input_vertices = 0;
+  int corner_vertices_inserted = 0;  // vertices inserted on corners (corner splits)
+  int corners_snapped = 0;           // corners taken by an existing boundary vertex moved onto it
+  int edges_split = 0;               // interior edges split at their midpoint (ear splits)
+  HarmonicWeights weights = HarmonicWeights::Cotangent;  // the weights of the returned map
+  bool sliding = false;     // the returned map is the sliding-boundary LSCM (else arc length)
+  int cotangent_flips = 0;  // flipped/degenerate triangles of the cotangent map (0 unless it fell back)
+  double width = 1.0;
+};
+
+// The initial map described above. V: #V x 3 (mm), F: #F x 3 counter-clockwise seen from outside,
+// one disk (checked: throws std::invalid_argument otherwise; callers give users an InputError
+// first). Vertices not used by F are carried along unused.
+ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F, const RectangleBoundaryMap& boundary);
+
+// Harmonic map of a disk with a Dirichlet boundary: the vertices listed in `fixed` get the rows
+// of `fixed_uv` (#fixed x 2); every other vertex used by F is the weighted mean of its
+// neighbours. Unused vertices get (0, 0). Returns #V x 2.
+MatrixXd harmonic_map(const MatrixXd& V, const MatrixXi& F, const std::vector<int>& fixed, const MatrixXd& fixed_uv,
+                      HarmonicWeights weights);
+
+// Least-squares conformal map onto the rectangle with boundary vertices sliding on their sides:
+// u harmonic with u = 0 / W on the left / right sides and a natural (Neumann) condition on the
+// bottom and top sides; v likewise with v = 0 / 1 on the bottom / top. Corners (two side bits) and
+// the vertex `pinned` (or -1) keep their UV. side_mask: RectangleSide bits per vertex.
+MatrixXd sliding_harmonic_map(const MatrixXd& V, const MatrixXi& F, const VectorXi& side_mask, double width,
+                              const MatrixXd& UV, int pinned, HarmonicWeights weights);
+
+// Number of triangles of a planar map with signed area <= min_area (flipped or degenerate).
+int count_flipped(const MatrixXd& UV, const MatrixXi& F, double min_area = 0.0);
+
+}  // namespace authalic

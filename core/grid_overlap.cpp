@@ -1,0 +1,335 @@
+// Exact clipping of mapped triangles against the cells of a regular grid (planar), and the same
+// in (longitude, z) coordinates for sphere maps. See core/grid_overlap.h.
+#include "core/grid_overlap.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace authalic {
+
+namespace {
+
+struct Pt {
+  double x, y;
+};
+using Poly = std::vector<Pt>;
+
+// Keeps the part of `in` with sign * (coordinate - bound) >= 0 (Sutherland-Hodgman, one edge).
+void clip_halfplane(const Poly& in, bool along_x, double bound, double sign, Poly& out) {
+  out.clear();
+  const size_t n = in.size();
+  if (n == 0) return;
+  auto side = [&](const Pt& p) { return sign * ((along_x ? p.x : p.y) - bound); };
+  for (size_t i = 0; i < n; ++i) {
+    const Pt& a = in[i];
+    const Pt& b = in[(i + 1) % n];
+    const double sa = side(a), sb = side(b);
+    if (sa >= 0) out.push_back(a);
+    if ((sa >= 0) != (sb >= 0)) {
+      const double t = sa / (sa - sb);
+      Pt p{a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)};
+      // Land exactly on the bound so neighbouring cells share the cut point bit for bit.
+      (along_x ? p.x : p.y) = bound;
+      out.push_back(p);
+    }
+  }
+}
+
+// Signed area and area-weighted centroid of a polygon (shoelace).
+double polygon_area_centroid(const Poly& p, Pt* centroid) {
+  double a2 = 0, cx = 0, cy = 0;
+  const size_t n = p.size();
+  // Relative to the first point to keep the shoelace well conditioned.
+  const double ox = n ? p[0].x : 0, oy = n ? p[0].y : 0;
+  for (size_t i = 0; i < n; ++i) {
+    const double x0 = p[i].x - ox, y0 = p[i].y - oy;
+    const double x1 = p[(i + 1) % n].x - ox, y1 = p[(i + 1) % n].y - oy;
+    const double cr = x0 * y1 - x1 * y0;
+    a2 += cr;
+    cx += (x0 + x1) * cr;
+    cy += (y0 + y1) * cr;
+  }
+  if (centroid) {
+    if (a2 != 0) {
+      *centroid = Pt{ox + cx / (3 * a2), oy + cy / (3 * a2)};
+    } else {
+      double sx = 0, sy = 0;
+      for (const Pt& q : p) sx += q.x, sy += q.y;
+      *centroid = n ? Pt{sx / n, sy / n} : Pt{0, 0};
+    }
+  }
+  return 0.5 * a2;
+}
+
+// Barycentric coordinates of q in triangle (a, b, c); thirds for a degenerate triangle.
+void barycentric(const Pt& q, const Pt& a, const Pt& b, const Pt& c, double out[3]) {
+  const double d = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+  if (std::abs(d) < 1e-300) {
+    out[0] = out[1] = out[2] = 1.0 / 3.0;
+    return;
+  }
+  const double l1 = ((q.x - a.x) * (c.y - a.y) - (q.y - a.y) * (c.x - a.x)) / d;
+  const double l2 = ((b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x)) / d;
+  out[0] = 1.0 - l1 - l2;
+  out[1] = l1;
+  out[2] = l2;
+}
+
+// Clips polygon `poly` (in grid coordinates of a grid with `cols` columns of width cw starting
+// at x0, `rows` rows of height rh from y0) into cells; calls emit(col, row, piece) for each
+// non-empty piece. Columns outside [0, cols) are passed on unchanged (the caller may wrap them).
+template <class Emit>
+void clip_into_cells(const Poly& poly, double x0, double cw, int col_lo_limit, int col_hi_limit, double y0, double rh,
+                     int rows, Emit emit) {
+  double xmin = poly[0].x, xmax = xmin, ymin = poly[0].y, ymax = ymin;
+  for (const Pt& p : poly) {
+    xmin = std::min(xmin, p.x), xmax = std::max(xmax, p.x);
+    ymin = std::min(ymin, p.y), ymax = std::max(ymax, p.y);
+  }
+  if (!(xmax >= xmin) || !(ymax >= ymin)) return;  // NaN coordinates: nothing to emit
+  const int c0 = std::max(col_lo_limit, static_cast<int>(std::floor((xmin - x0) / cw)));
+  const int c1 = std::min(col_hi_limit - 1, static_cast<int>(std::floor((xmax - x0) / cw)));
+  const int r0 = std::max(0, static_cast<int>(std::floor((ymin - y0) / rh)));
+  const int r1 = std::min(rows - 1, static_cast<int>(std::floor((ymax - y0) / rh)));
+  if (c0 > c1 || r0 > r1) return;
+  Poly rest = poly, strip, tmp, piece, tmp2;
+  for (int c = c0; c <= c1; ++c) {
+    const double right = x0 + (c + 1) * cw;
+    // strip = rest ∩ {x <= right} ∩ {x >= left}; rest = rest ∩ {x >= right}
+    if (c == c0) {
+      clip_halfplane(rest, true, x0 + c * cw, +1.0, tmp);
+      rest.swap(tmp);
+    }
+    clip_halfplane(rest, true, right, -1.0, strip);
+    if (c < c1) {
+      clip_halfplane(rest, true, right, +1.0, tmp);
+      rest.swap(tmp);
+    }
+    if (strip.size() < 3) continue;
+    Poly srest = strip;
+    clip_halfplane(srest, false, y0 + r0 * rh, +1.0, tmp2);
+    srest.swap(tmp2);
+    for (int r = r0; r <= r1; ++r) {
+      const double top = y0 + (r + 1) * rh;
+      clip_halfplane(srest, false, top, -1.0, piece);
+      if (r < r1) {
+        clip_halfplane(srest, false, top, +1.0, tmp2);
+        srest.swap(tmp2);
+      }
+      if (piece.size() >= 3) emit(c, r, piece);
+      if (srest.size() < 3) break;
+    }
+  }
+}
+
+// Runs `per_face(f, out)` for every face in parallel (fixed static chunks) and concatenates the
+// per-face results in face order, so the output is the same for any thread count.
+template <class PerFace>
+std::vector<OverlapPiece> collect_pieces(Eigen::Index num_faces, PerFace per_face) {
+  const int chunks = 64;
+  std::vector<std::vector<OverlapPiece>> parts(chunks);
+  const Eigen::Index per_chunk = (num_faces + chunks - 1) / chunks;
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < chunks; ++k) {
+    const Eigen::Index begin = k * per_chunk, end = std::min(num_faces, begin + per_chunk);
+    std::vector<OverlapPiece> local;
+    for (Eigen::Index f = begin; f < end; ++f) {
+      const size_t start = local.size();
+      per_face(static_cast<int>(f), local);
+      std::sort(local.begin() + start, local.end(),
+                [](const OverlapPiece& a, const OverlapPiece& b) { return a.cell < b.cell; });
+    }
+    parts[k] = std::move(local);
+  }
+  size_t total = 0;
+  for (const auto& p : parts) total += p.size();
+  std::vector<OverlapPiece> out;
+  out.reserve(total);
+  for (auto& p : parts) out.insert(out.end(), p.begin(), p.end());
+  return out;
+}
+
+}  // namespace
+
+std::vector<OverlapPiece> grid_overlap(const MatrixXd& UV, const MatrixXi& F, const GridSpec& grid) {
+  const double cw = grid.width / grid.cols, rh = grid.height / grid.rows;
+  return collect_pieces(F.rows(), [&](int f, std::vector<OverlapPiece>& out) {
+    const Pt a{UV(F(f, 0), 0), UV(F(f, 0), 1)}, b{UV(F(f, 1), 0), UV(F(f, 1), 1)}, c{UV(F(f, 2), 0), UV(F(f, 2), 1)};
+    const Poly tri{a, b, c};
+    clip_into_cells(tri, grid.x0, cw, 0, grid.cols, grid.y0, rh, grid.rows, [&](int col, int row, const Poly& piece) {
+      Pt centroid;
+      const double area = std::abs(polygon_area_centroid(piece, &centroid));
+      if (!(area > 0)) return;
+      OverlapPiece p;
+      p.face = f;
+      p.cell = row * grid.cols + col;
+      p.domain_area = area;
+      barycentric(centroid, a, b, c, p.bary);
+      out.push_back(p);
+    });
+  });
+}
+
+std::vector<OverlapPiece> sphere_grid_overlap(const MatrixXd& S, const MatrixXi& F, const SphereGridSpec& grid) {
+  // In (longitude φ, z) the sphere's area element is dφ dz (Archimedes), so the equal-area cells
+  // are rectangles of a regular grid over [−π, π] x [−1, 1]. Triangle edges are taken as straight
+  // segments in (φ, z) (second-order accurate for small triangles). A triangle crossing the date
+  // line is unwrapped to continuous φ and clipped against three copies of the grid; a triangle
+  // around a pole becomes the region between its edges and the line z = ±1.
+  const double cw = 2 * M_PI / grid.sectors, rh = 2.0 / grid.bands;
+  auto wrap = [](double d) {
+    while (d > M_PI) d -= 2 * M_PI;
+    while (d < -M_PI) d += 2 * M_PI;
+    return d;
+  };
+  return collect_pieces(F.rows(), [&](int f, std::vector<OverlapPiece>& out) {
+    Eigen::Vector3d p[3];
+    double phi[3], z[3];
+    bool at_pole[3];
+    for (int k = 0; k < 3; ++k) {
+      p[k] = S.row(F(f, k)).head<3>().transpose();
+      const double r = p[k].norm();
+      if (r > 0) p[k] /= r;
+      z[k] = std::clamp(p[k].z(), -1.0, 1.0);
+      const double rho = std::hypot(p[k].x(), p[k].y());
+      at_pole[k] = rho < 1e-12;
+      phi[k] = at_pole[k] ? 0.0 : std::atan2(p[k].y(), p[k].x());
+    }
+    // Walk the corners in order, unwrapping φ; a pole corner becomes a segment on z = ±1 between
+    // its neighbours' longitudes.
+    Poly poly;
+    double last = 0;
+    bool have_last = false;
+    int first_nonpole = -1;
+    for (int k = 0; k < 3; ++k)
+      if (!at_pole[k]) {
+        first_nonpole = k;
+        break;
+      }
+    if (first_nonpole < 0) return;
+    for (int s = 0; s < 3; ++s) {
+      const int k = (first_nonpole + s) % 3;
+      if (!at_pole[k]) {
+        const double ph = have_last ? last + wrap(phi[k] - last) : phi[k];
+        poly.push_back({ph, z[k]});
+        last = ph;
+        have_last = true;
+      } else {
+        const int next = (k + 1) % 3;
+        const double zp = z[k] > 0 ? 1.0 : -1.0;
+        poly.push_back({last, zp});
+        if (!at_pole[next]) {
+          const double ph = last + wrap(phi[next] - last);
+          poly.push_back({ph, zp});
+        }
+      }
+    }
+    // Winding: the unwrapped closing step from the last point back to the first.
+    const double closing = last + wrap(poly[0].x - last);
+    const double winding = closing - poly[0].x;  // 0 or ±2π
+    if (std::abs(winding) > M_PI) {
+      // The triangle surrounds a pole: close the polygon along z = ±1.
+      const double mean_z = (p[0].z() + p[1].z() + p[2].z()) / 3.0;
+      const double zp = mean_z > 0 ? 1.0 : -1.0;
+      poly.push_back({closing, poly[0].y});
+      poly.push_back({closing, zp});
+      poly.push_back({poly[0].x, zp});
+    }
+    // Shift so the polygon's leftmost point lies in [−π, π), then clip against 3 grid copies.
+    double xmin = poly[0].x;
+    for (const Pt& q : poly) xmin = std::min(xmin, q.x);
+    const double shift = -2 * M_PI * std::floor((xmin + M_PI) / (2 * M_PI));
+    for (Pt& q : poly) q.x += shift;
+    std::vector<OverlapPiece> local;
+    clip_into_cells(poly, -M_PI, cw, 0, 3 * grid.sectors, -1.0, rh, grid.bands, [&](int col, int row, const Poly& piece) {
+      Pt centroid;
+      const double area = std::abs(polygon_area_centroid(piece, &centroid));
+      if (!(area > 0)) return;
+      OverlapPiece op;
+      op.face = f;
+      op.cell = row * grid.sectors + (col % grid.sectors);
+      op.domain_area = area;
+      // Barycentric coordinates of the piece's centroid, taken on the sphere: the centroid's
+      // direction projected into the flat triangle of the three unit vectors.
+      const double lon = centroid.x, zc = std::clamp(centroid.y, -1.0, 1.0);
+      const double rc = std::sqrt(std::max(0.0, 1 - zc * zc));
+      const Eigen::Vector3d q(rc * std::cos(lon), rc * std::sin(lon), zc);
+      const Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+      const double d = n.squaredNorm();
+      if (d > 1e-300) {
+        // Intersect the ray through q with the triangle's plane, then barycentric coordinates.
+        const double denom = n.dot(q);
+        const Eigen::Vector3d x = std::abs(denom) > 1e-300 ? Eigen::Vector3d(q * (n.dot(p[0]) / denom)) : q;
+        const double l1 = n.dot((x - p[0]).cross(p[2] - p[0])) / d;
+        const double l2 = n.dot((p[1] - p[0]).cross(x - p[0])) / d;
+        op.bary[0] = 1 - l1 - l2;
+        op.bary[1] = l1;
+        op.bary[2] = l2;
+      } else {
+        op.bary[0] = op.bary[1] = op.bary[2] = 1.0 / 3.0;
+      }
+      local.push_back(op);
+    });
+    // A pole polygon spans exactly 2π, so one cell can receive pieces from two grid copies:
+    // merge them (local is sorted by cell).
+    std::sort(local.begin(), local.end(), [](const OverlapPiece& x, const OverlapPiece& y) { return x.cell < y.cell; });
+    const size_t first = out.size();
+    for (const OverlapPiece& piece : local) {
+      if (out.size() > first && out.back().cell == piece.cell) {
+        OverlapPiece& m = out.back();
+        const double tot = m.domain_area + piece.domain_area;
+        for (int k = 0; k < 3; ++k) m.bary[k] = (m.bary[k] * m.domain_area + piece.bary[k] * piece.domain_area) / tot;
+        m.domain_area = tot;
+      } else {
+        out.push_back(piece);
+      }
+    }
+  });
+}
+
+VectorXd cell_surface_areas(const std::vector<OverlapPiece>& pieces, const VectorXd& face_area_3d,
+                            const VectorXd& face_domain_area, int num_cells) {
+  VectorXd cells = VectorXd::Zero(num_cells);
+  for (const OverlapPiece& p : pieces) {
+    const double fd = face_domain_area[p.face];
+    if (fd > 0) cells[p.cell] += face_area_3d[p.face] * p.domain_area / fd;
+  }
+  return cells;
+}
+
+VectorXd rasterize_face_measure(const MatrixXd& UV, const MatrixXi& F, const VectorXd& face_measure, const GridSpec& grid) {
+  // Fixed chunks of faces, each accumulated serially into its own buffer, buffers summed in chunk
+  // order: the same floating-point sums for any thread count.
+  const int chunks = 4;
+  const Eigen::Index nf = F.rows();
+  const Eigen::Index per_chunk = (nf + chunks - 1) / chunks;
+  const double cw = grid.width / grid.cols, rh = grid.height / grid.rows;
+  std::vector<VectorXd> acc(chunks);
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < chunks; ++k) {
+    VectorXd cells = VectorXd::Zero(grid.num_cells());
+    const Eigen::Index begin = k * per_chunk, end = std::min(nf, begin + per_chunk);
+    for (Eigen::Index f = begin; f < end; ++f) {
+      const Pt a{UV(F(f, 0), 0), UV(F(f, 0), 1)}, b{UV(F(f, 1), 0), UV(F(f, 1), 1)}, c{UV(F(f, 2), 0), UV(F(f, 2), 1)};
+      const double whole = 0.5 * std::abs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
+      if (!(whole > 0)) continue;
+      const double scale = face_measure[f] / whole;
+      clip_into_cells(Poly{a, b, c}, grid.x0, cw, 0, grid.cols, grid.y0, rh, grid.rows,
+                      [&](int col, int row, const Poly& piece) {
+                        cells[row * grid.cols + col] += scale * std::abs(polygon_area_centroid(piece, nullptr));
+                      });
+    }
+    acc[k] = std::move(cells);
+  }
+  VectorXd out = std::move(acc[0]);
+  for (int k = 1; k < chunks; ++k) out += acc[k];
+  return out;
+}
+
+VectorXd piece_face_areas(const std::vector<OverlapPiece>& pieces, int num_faces) {
+  VectorXd a = VectorXd::Zero(num_faces);
+  for (const OverlapPiece& p : pieces) a[p.face] += p.domain_area;
+  return a;
+}
+
+}  // namespace authalic

@@ -1,0 +1,72 @@
+#pragma once
+// Neumann Poisson problems on a regular cell-centred grid over a rectangle, solved exactly (for
+// the 5-point stencil) by the discrete cosine transform.
+//
+// Why: the Lie-advection flow of Zou et al. 2011 (seed 000, eq. 9-10) needs Δg = h_Ω − h_M with
+// the Neumann condition ∂g/∂n = 0 (DLF, seed 004, eq. 3). Solved on the fixed rectangle instead
+// of the degenerate flowing mesh (issue 3, "a formulation that works"), the DCT-II diagonalises
+// the grid Laplacian with reflecting (Neumann) walls, so the solve is exact and O(n log n).
+//
+// Grid convention: a field on an nx by ny grid of cells of size hx by hy over [0, nx hx] x
+// [0, ny hy] is an Eigen matrix with ny rows (y index, row 0 at y = 0) and nx columns (x index);
+// cell (r, c) has its centre at ((c + 1/2) hx, (r + 1/2) hy).
+//
+// Discrete problem: with ghost cells mirroring the wall cells (g_{-1} = g_0, g_n = g_{n-1}),
+//   (g_{r,c+1} − 2 g_{r,c} + g_{r,c−1}) / hx² + (g_{r+1,c} − 2 g_{r,c} + g_{r−1,c}) / hy² = f_{r,c}.
+// Its eigenvectors are cos(π k (c + 1/2) / nx) cos(π l (r + 1/2) / ny) with eigenvalues
+//   (2 cos(π k / nx) − 2) / hx² + (2 cos(π l / ny) − 2) / hy²,
+// so g = IDCT(DCT(f) / eigenvalue), the constant mode (eigenvalue 0) set to zero: g has zero mean
+// and the solve implicitly removes the mean of f (the compatibility condition of the Neumann problem).
+#include <vector>
+
+#include "core/mesh.h"
+
+namespace authalic {
+
+// Unnormalised DCT-II of every column of X in place: X_k = sum_n x_n cos(π k (2n + 1) / (2N)),
+// N = X.rows(). Power-of-two N uses an FFT (Makhoul 1980, O(N log N)); other N a cosine matrix.
+// Columns are independent (OpenMP over columns, identical results for any thread count).
+void dct2_columns(MatrixXd& X);
+// Inverse of dct2_columns (a scaled DCT-III): x_n = (X_0 + 2 sum_{k>=1} X_k cos(π k (2n+1)/(2N))) / N.
+void idct2_columns(MatrixXd& X);
+// 2D transforms of a grid field (columns, then rows).
+void dct2_2d(MatrixXd& X);
+void idct2_2d(MatrixXd& X);
+
+// A reusable solver for one grid size (precomputed eigenvalues).
+class NeumannPoissonGrid {
+ public:
+  // nx by ny cells of size hx by hy (for the unit square at resolution n: n, n, 1/n, 1/n).
+  NeumannPoissonGrid(int nx, int ny, double hx, double hy);
+
+  int nx() const { return nx_; }
+  int ny() const { return ny_; }
+  double hx() const { return hx_; }
+  double hy() const { return hy_; }
+
+  // Solves Δ_h g = f − mean(f) (5-point stencil, Neumann walls); returns g with zero mean.
+  // f: ny x nx.
+  MatrixXd solve(const MatrixXd& f) const;
+
+  // Gaussian smoothing with reflecting walls: multiplies the cosine coefficients by
+  // exp(−σ² (ω_k² + ω_l²) / 2), ω_k = π k / (nx hx), i.e. convolution with a Gaussian of standard
+  // deviation sigma (domain units) on the evenly extended field. Preserves the mean exactly.
+  MatrixXd smooth(const MatrixXd& f, double sigma) const;
+
+  // Both at once, sharing the forward transform: f_smooth = smooth(f, sigma) and
+  // g solving Δ_h g = f_smooth − mean(f_smooth).
+  void smooth_and_solve(const MatrixXd& f, double sigma, MatrixXd* f_smooth, MatrixXd* g) const;
+
+ private:
+  int nx_, ny_;
+  double hx_, hy_;
+  VectorXd eig_x_, eig_y_;  // (2 cos(π k / n) − 2) / h²
+};
+
+// Gradient of a cell-centred field on the staggered (MAC) grid that the 5-point Neumann
+// Laplacian is the divergence of: gx (ny x (nx+1)) at the vertical cell faces x = c hx,
+// gy ((ny+1) x nx) at the horizontal faces y = r hy. The wall values are exactly zero (Neumann),
+// so a velocity interpolated from them has no normal component on the walls.
+void staggered_gradient(const MatrixXd& g, double hx, double hy, MatrixXd* gx, MatrixXd* gy);
+
+}  // namespace authalic

@@ -1,0 +1,93 @@
+#pragma once
+// Authalic (area-preserving) map of a closed genus-0 surface onto the unit sphere:
+//   1. conformal initial map by Haker et al. 2000 (seed 002, sections 2-3): puncture one
+//      triangle, solve D x = a, D y = b with the cotangent matrix D (eqs. 5-7), inverse
+//      stereographic projection (section 3.4);
+//   2. Moebius normalisation: the conformal map is unique up to a Moebius transformation of the
+//      sphere; the one chosen puts the area centroid (cortical area carried by each vertex) at
+//      the origin, so no part of the cortex is crushed near one pole;
+//   3. Moser's area-restoring flow on the sphere (core/sphere_flow.h; Zou et al. 2011 section
+//      4.5.2, Dominitz & Tannenbaum 2010 section 4.2);
+//   4. the anatomical orientation rule (sphere_orientation below).
+#include <memory>
+#include <vector>
+
+#include "core/mesh.h"
+#include "core/progress.h"
+#include "core/sphere_flow.h"
+
+namespace authalic {
+
+// Haker's conformal map with the puncture p in face `puncture_face` = ABC (seed 002 eq. 7; the
+// right-hand side a - i b holds the derivatives of the hat functions of A, B, C along the face's
+// u axis (A to B) and v axis (toward C), which do not depend on where p lies in the face).
+// Inputs: V #V by 3, F #F by 3 (closed, genus 0, outward oriented).
+// The cotangent matrix is factorised once per mesh, so trying several punctures costs one
+// back-substitution each.
+class HakerConformalSolver {
+ public:
+  HakerConformalSolver(const MatrixXd& V, const MatrixXi& F);
+  ~HakerConformalSolver();
+  HakerConformalSolver(const HakerConformalSolver&) = delete;
+  HakerConformalSolver& operator=(const HakerConformalSolver&) = delete;
+  // The planar conformal coordinates z = x + i y (#V by 2) of seed 002 eq. 7.
+  MatrixXd planar_map(int puncture_face) const;
+  // planar_map followed by inverse stereographic projection (seed 002 section 3.4, step 3).
+  MatrixXd sphere_map(int puncture_face) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Inverse stereographic projection from the plane to the unit sphere, pole at (0,0,1):
+// x + i y -> (2x, 2y, r^2 - 1) / (1 + r^2).
+MatrixXd inverse_stereographic(const MatrixXd& Z);
+
+// Moebius normalisation on the unit sphere: the orientation-preserving Moebius transformation
+// (a hyperbolic translation of the ball, phi_a(x) = (1-|a|^2)(x-a)/|x-a|^2 - a) after which
+// sum_i w_i x_i = 0. Newton iterations on a; `max_iterations` caps the work.
+// Inputs: S #V by 3 unit vectors, w #V non-negative weights (e.g. barycentric vertex areas of
+// the 3D surface). Output: #V by 3 unit vectors. *residual gets |sum w x| / sum w at the end.
+MatrixXd mobius_centre(const MatrixXd& S, const VectorXd& w, int max_iterations = 100, double* residual = nullptr);
+
+// Orientation rule: the rotation R (det +1) that best aligns each vertex's sphere position with
+// its direction from the surface's area centroid (area-weighted orthogonal Procrustes, Kabsch):
+// maximises sum_i A_i <R s_i, (p_i - c)/|p_i - c|>. For a surface in RAS coordinates the sphere
+// then has +x right, +y anterior, +z superior, like the surface itself (and like FreeSurfer's
+// ?h.sphere): for a left hemisphere the lateral side faces -x, the medial wall +x.
+Eigen::Matrix3d sphere_orientation(const MatrixXd& V, const MatrixXi& F, const MatrixXd& S);
+
+// Moves the vertices of flipped sphere faces (and, if needed, their neighbours) to the
+// normalised mean of their neighbours until no face is flipped or `max_rounds` is reached.
+// Returns the number of vertices moved.
+int repair_sphere_flips(MatrixXd& S, const MatrixXi& F, int max_rounds = 50);
+
+struct SphereMapOptions {
+  int puncture_face = -1;         // -1: best-shaped faces are tried in turn (see .cpp)
+  int max_puncture_attempts = 6;  // punctures tried while the conformal map has flipped faces
+  bool flow = true;               // false: stop after the conformal map (+ normalisation)
+  bool orient = true;             // apply sphere_orientation
+  SphereFlowOptions flow_options;
+};
+
+struct SphereMapResult {
+  MatrixXd sphere;        // #V by 3 on the unit sphere: the authalic map
+  MatrixXd conformal;     // #V by 3: the Moebius-normalised conformal map (same rotation)
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // orientation applied to both
+  int puncture_face = -1;
+  int puncture_attempts = 0;
+  int conformal_flips = 0;      // flipped faces of the conformal map (after normalisation)
+  int repaired_vertices = 0;    // vertices moved by repair_sphere_flips (conformal + final)
+  int flips = 0;                // flipped faces of the final map
+  double mobius_residual = 0;   // |area centroid| after normalisation
+  SphereFlowReport flow;
+  double seconds_conformal = 0, seconds_flow = 0;
+};
+
+// The whole pipeline. Throws InputError when the mesh is not a closed, oriented, genus-0
+// manifold surface (message with its measured topology) or is oriented inward.
+SphereMapResult authalic_sphere_map(const TriMesh& mesh, const SphereMapOptions& options = {},
+                                    const ProgressFn& progress = {});
+
+}  // namespace authalic

@@ -1,0 +1,47 @@
+// Sulcal-depth proxy: depth below an implicitly smoothed copy of the surface (see sulcal_depth.h).
+#include "core/sulcal_depth.h"
+
+#include <Eigen/IterativeLinearSolvers>
+
+#include <cmath>
+
+namespace authalic {
+
+VectorXd sulcal_depth_proxy(const MatrixXd& V, const MatrixXi& F) {
+  const Eigen::Index n = V.rows();
+  VectorXd depth = VectorXd::Zero(n);
+  if (n == 0 || F.rows() == 0) return depth;
+  const VectorXd mass = barycentric_vertex_areas(V, F);
+  const double total = mass.sum();
+  if (!(total > 0)) return depth;
+  const double t = std::pow(0.05 * std::sqrt(total), 2);
+  // (M - t L) is symmetric positive definite on the used vertices; unused vertices get a unit
+  // diagonal so the system stays regular (their rows are then just P = V).
+  SparseMatrix A = -t * cotmatrix(V, F);
+  for (Eigen::Index i = 0; i < n; ++i) A.coeffRef(i, i) += mass[i] > 0 ? mass[i] : 1.0;
+  A.makeCompressed();
+  MatrixXd rhs(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) rhs.row(i) = (mass[i] > 0 ? mass[i] : 1.0) * V.row(i).leftCols(3);
+  // Diagonally dominant enough for plain Jacobi-preconditioned CG; deterministic (sequential
+  // reductions).
+  Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper> cg;
+  cg.setTolerance(1e-8);
+  cg.setMaxIterations(2000);
+  cg.compute(A);
+  MatrixXd P(n, 3);
+  for (int c = 0; c < 3; ++c) P.col(c) = cg.solveWithGuess(rhs.col(c), V.col(c));
+  const MatrixXd N = vertex_normals(P, F);
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!(mass[i] > 0)) continue;
+    // positive below the smoothed surface (in a sulcus), as FreeSurfer's sulc
+    depth[i] = -(V.row(i).leftCols(3) - P.row(i)).dot(N.row(i));
+    sum += mass[i] * depth[i];
+  }
+  const double mean = sum / total;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (mass[i] > 0) depth[i] -= mean;
+  return depth;
+}
+
+}  // namespace authalic

@@ -1,0 +1,174 @@
+#include "io/io_internal.h"
+
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <cctype>
+#include <cerrno>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <system_error>
+#include <vector>
+
+namespace authalic::io::detail {
+
+std::size_t g_max_decompressed_bytes = std::size_t(8) << 30;  // 8 GiB
+
+void fail(const std::string& path, const std::string& problem, const std::string& hint) {
+  throw InputError(path + ": " + problem + "; " + hint);
+}
+
+std::string read_file(const std::string& path) {
+  require_readable(path);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, std::string("cannot open (") + std::strerror(errno) + ")", "check the permissions");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) fail(path, "read error", "check the file system");
+  return std::move(ss).str();
+}
+
+void require_readable(const std::string& path) {
+  std::error_code ec;
+  const std::filesystem::file_status st = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(st)) fail(path, "file not found", "check the path");
+  if (std::filesystem::is_directory(st)) fail(path, "is a directory, expected a file", "check the path");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, std::string("cannot open (") + std::strerror(errno) + ")", "check the permissions");
+}
+
+bool is_gzip(const std::string& bytes) {
+  return bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0x1f && static_cast<unsigned char>(bytes[1]) == 0x8b;
+}
+
+std::string read_file_maybe_gz(const std::string& path) {
+  std::string bytes = read_file(path);
+  if (is_gzip(bytes)) return gunzip(bytes, path);
+  return bytes;
+}
+
+std::string gunzip(const std::string& bytes, const std::string& path) {
+  std::string out;
+  z_stream zs{};
+  // 15 + 32: zlib or gzip header, detected automatically.
+  if (inflateInit2(&zs, 15 + 32) != Z_OK) throw std::runtime_error(path + ": zlib initialisation failed");
+  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data()));
+  zs.avail_in = static_cast<uInt>(bytes.size());
+  char buffer[1 << 16];
+  int ret = Z_OK;
+  for (;;) {
+    zs.next_out = reinterpret_cast<Bytef*>(buffer);
+    zs.avail_out = sizeof(buffer);
+    ret = inflate(&zs, Z_NO_FLUSH);
+    if (ret != Z_OK && ret != Z_STREAM_END) break;
+    out.append(buffer, sizeof(buffer) - zs.avail_out);
+    if (out.size() > g_max_decompressed_bytes) {
+      inflateEnd(&zs);
+      fail(path, "decompresses to more than " + fmt_size(g_max_decompressed_bytes), "the gzip stream is not a plausible image");
+    }
+    if (ret == Z_STREAM_END) {
+      // Concatenated gzip members (allowed by the format): continue with the next one.
+      if (zs.avail_in > 0 && zs.avail_in >= 2 && zs.next_in[0] == 0x1f && zs.next_in[1] == 0x8b) {
+        if (inflateReset(&zs) != Z_OK) break;
+        continue;
+      }
+      break;
+    }
+    if (zs.avail_in == 0 && zs.avail_out != 0) {
+      ret = Z_BUF_ERROR;  // input ended before the stream did
+      break;
+    }
+  }
+  inflateEnd(&zs);
+  if (ret != Z_STREAM_END)
+    fail(path, ret == Z_BUF_ERROR ? "gzip stream is truncated" : "gzip stream is corrupt", "the file is incomplete or damaged; re-copy or re-create it");
+  return out;
+}
+
+std::string gzip(const std::string& bytes, int level) {
+  z_stream zs{};
+  if (deflateInit2(&zs, level, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
+    throw std::runtime_error("zlib initialisation failed");
+  std::string out;
+  out.resize(deflateBound(&zs, static_cast<uLong>(bytes.size())) + 32);
+  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data()));
+  zs.avail_in = static_cast<uInt>(bytes.size());
+  zs.next_out = reinterpret_cast<Bytef*>(out.data());
+  zs.avail_out = static_cast<uInt>(out.size());
+  const int ret = deflate(&zs, Z_FINISH);
+  const std::size_t produced = out.size() - zs.avail_out;
+  deflateEnd(&zs);
+  if (ret != Z_STREAM_END) throw std::runtime_error("zlib compression failed");
+  out.resize(produced);
+  return out;
+}
+
+std::string lower_filename(const std::string& path) {
+  std::string name = std::filesystem::path(path).filename().string();
+  std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return std::tolower(c); });
+  return name;
+}
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+void BigEndianReader::need(std::size_t n, const char* what) const {
+  if (n > bytes_.size() - pos_) {
+    fail("truncated: " + std::string(what) + " needs " + std::to_string(n) + " bytes at offset " + std::to_string(pos_) +
+             " but the file has " + std::to_string(bytes_.size()) + " bytes",
+         "the file is incomplete or not a " + format_ + " file");
+  }
+}
+
+std::string BigEndianReader::line(std::size_t max_length, const char* what) {
+  const std::size_t end = bytes_.find('\n', pos_);
+  const std::size_t stop = end == std::string::npos ? bytes_.size() : end;
+  if (stop - pos_ > max_length)
+    fail(std::string(what) + " is longer than " + std::to_string(max_length) + " bytes", "this is not a " + format_ + " file");
+  std::string s = bytes_.substr(pos_, stop - pos_);
+  pos_ = end == std::string::npos ? bytes_.size() : end + 1;
+  return s;
+}
+
+void BigEndianReader::fail(const std::string& problem, const std::string& hint) const { detail::fail(path_, problem, hint); }
+
+TempFile::TempFile(const std::string& suffix) {
+  const std::string folder = std::filesystem::temp_directory_path().string();
+  std::string pattern = folder + "/authalic-XXXXXX" + suffix;
+  std::vector<char> buf(pattern.begin(), pattern.end());
+  buf.push_back('\0');
+  const int fd = ::mkstemps(buf.data(), static_cast<int>(suffix.size()));
+  if (fd < 0) throw std::runtime_error("cannot create a temporary file in " + folder + ": " + std::strerror(errno));
+  ::close(fd);
+  path_ = buf.data();
+}
+
+TempFile::~TempFile() { ::unlink(path_.c_str()); }
+
+void TempFile::write(const std::string& bytes) const {
+  FILE* f = std::fopen(path_.c_str(), "wb");
+  if (!f) throw std::runtime_error("cannot write the temporary file " + path_ + ": " + std::strerror(errno));
+  const std::size_t n = std::fwrite(bytes.data(), 1, bytes.size(), f);
+  const int err = errno;
+  if (std::fclose(f) != 0 || n != bytes.size())
+    throw std::runtime_error("cannot write the temporary file " + path_ + " (temp folder full?): " + std::strerror(err));
+}
+
+std::string fmt_size(std::size_t bytes) {
+  std::ostringstream ss;
+  if (bytes >= (std::size_t(1) << 30))
+    ss << (static_cast<double>(bytes) / (1 << 30)) << " GiB";
+  else if (bytes >= (std::size_t(1) << 20))
+    ss << (static_cast<double>(bytes) / (1 << 20)) << " MiB";
+  else
+    ss << bytes << " bytes";
+  return ss.str();
+}
+
+}  // namespace authalic::io::detail

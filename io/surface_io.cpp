@@ -1,0 +1,349 @@
+// Surface and per-vertex I/O: format dispatch (magic number first, extension second), the checks
+// every reader shares, and the small text formats. Format specifics live in freesurfer_io.cpp,
+// gifti_io.cpp and vtk_io.cpp.
+#include "io/surface_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <sstream>
+
+#include "io/atomic_file.h"
+#include "io/io_internal.h"
+#include "io/surface_formats.h"
+
+namespace authalic::io {
+
+using detail::ends_with;
+using detail::fail;
+
+namespace detail {
+
+void validate_mesh(const TriMesh& mesh, const std::string& path, const std::string& format) {
+  const Eigen::Index nv = mesh.V.rows();
+  for (Eigen::Index i = 0; i < nv; ++i) {
+    if (!mesh.V.row(i).allFinite()) {
+      std::ostringstream ss;
+      ss << "vertex " << i << " has a non-finite coordinate (" << mesh.V(i, 0) << ", " << mesh.V(i, 1) << ", "
+         << (mesh.V.cols() > 2 ? mesh.V(i, 2) : 0.0) << ")";
+      fail(path, ss.str(), "the " + format + " file is corrupt; re-create it");
+    }
+  }
+  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) {
+    for (int c = 0; c < mesh.F.cols(); ++c) {
+      const int v = mesh.F(f, c);
+      if (v < 0 || v >= nv)
+        fail(path,
+             "face " + std::to_string(f) + " uses vertex " + std::to_string(v) + ", outside 0.." + std::to_string(nv - 1) + " (" +
+                 std::to_string(nv) + " vertices)",
+             "the " + format + " file is corrupt; re-create it");
+    }
+  }
+}
+
+}  // namespace detail
+
+namespace {
+
+enum class SurfaceFormat { kFreeSurfer, kPatch, kCurv, kGifti, kVtk, kVtp, kPly, kObj, kStl, kUnknown };
+
+// Magic first: a GIFTI named lh.white or a FreeSurfer surface named x.gii is still read correctly.
+SurfaceFormat sniff_surface(const std::string& bytes, const std::string& path) {
+  using detail::FreeSurferKind;
+  switch (detail::sniff_freesurfer(bytes)) {
+    case FreeSurferKind::kTriangleSurface: return SurfaceFormat::kFreeSurfer;
+    case FreeSurferKind::kPatch: return SurfaceFormat::kPatch;
+    case FreeSurferKind::kNewCurv: return SurfaceFormat::kCurv;
+    default: break;
+  }
+  if (detail::is_gzip(bytes) || detail::looks_like_gifti(bytes)) return SurfaceFormat::kGifti;
+  const std::string head = bytes.substr(0, 512);
+  if (head.rfind("# vtk DataFile", 0) == 0) return SurfaceFormat::kVtk;
+  if (head.find("<VTKFile") != std::string::npos) return SurfaceFormat::kVtp;
+  if (head.rfind("ply", 0) == 0 && head.size() > 3 && (head[3] == '\n' || head[3] == '\r')) return SurfaceFormat::kPly;
+  // Binary STL: 80-byte header, uint32 count, 50 bytes per triangle (the header may start "solid").
+  if (bytes.size() >= 84) {
+    std::uint32_t n;
+    std::memcpy(&n, bytes.data() + 80, 4);  // little-endian in the file; x86 hosts read it directly
+    if (84 + 50ull * n == bytes.size()) return SurfaceFormat::kStl;
+  }
+  if (head.rfind("solid", 0) == 0) return SurfaceFormat::kStl;
+  const std::string name = detail::lower_filename(path);
+  if (ends_with(name, ".gii")) return SurfaceFormat::kGifti;
+  if (ends_with(name, ".vtk")) return SurfaceFormat::kVtk;
+  if (ends_with(name, ".vtp")) return SurfaceFormat::kVtp;
+  if (ends_with(name, ".ply")) return SurfaceFormat::kPly;
+  if (ends_with(name, ".obj")) return SurfaceFormat::kObj;
+  if (ends_with(name, ".stl")) return SurfaceFormat::kStl;
+  return SurfaceFormat::kUnknown;
+}
+
+std::string output_format(const std::string& path) {
+  const std::string name = detail::lower_filename(path);
+  if (ends_with(name, ".gii") || ends_with(name, ".gii.gz")) return "gifti";
+  for (const char* ext : {"vtk", "vtp", "ply", "obj", "stl"})
+    if (ends_with(name, std::string(".") + ext)) return ext;
+  return "freesurfer";
+}
+
+bool is_text(const std::string& bytes) {
+  for (const char c : bytes) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x09 || (u > 0x0d && u < 0x20) || u == 0x7f) return false;
+  }
+  return true;
+}
+
+// One number per line (blank lines and '#' comments skipped).
+VectorXd parse_text_values(const std::string& text, const std::string& path) {
+  std::vector<double> values;
+  std::istringstream in(text);
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    const std::size_t b = line.find_first_not_of(" \t\r");
+    if (b == std::string::npos || line[b] == '#') continue;
+    char* end = nullptr;
+    const double v = std::strtod(line.c_str() + b, &end);
+    const std::string rest = end ? std::string(end) : std::string();
+    if (end == line.c_str() + b || rest.find_first_not_of(" \t\r") != std::string::npos)
+      fail(path, "line " + std::to_string(line_no) + " is not a single number: '" + line.substr(0, 60) + "'",
+           "a text per-vertex file has one value per line");
+    if (!std::isfinite(v)) fail(path, "line " + std::to_string(line_no) + " is not finite (NaN or Inf)", "fix or mask the per-vertex data");
+    values.push_back(v);
+  }
+  return Eigen::Map<VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
+}
+
+void check_length(const std::string& path, Eigen::Index n, int expected_vertices) {
+  if (expected_vertices >= 0 && n != expected_vertices)
+    fail(path, "has " + std::to_string(n) + " values but the surface has " + std::to_string(expected_vertices) + " vertices",
+         "use the per-vertex file that belongs to this surface");
+}
+
+void validate_for_writing(const TriMesh& mesh, const std::string& path) {
+  if (mesh.V.cols() != 2 && mesh.V.cols() != 3)
+    throw InputError(path + ": vertex matrix has " + std::to_string(mesh.V.cols()) + " columns (expected 2 or 3); nothing written");
+  if (mesh.F.rows() > 0 && mesh.F.cols() != 3)
+    throw InputError(path + ": face matrix has " + std::to_string(mesh.F.cols()) + " columns (expected 3); nothing written");
+  detail::validate_mesh(mesh, path, "output");
+}
+
+TriMesh as_3d(const TriMesh& mesh) {
+  if (mesh.V.cols() == 3) return mesh;
+  TriMesh m;
+  m.F = mesh.F;
+  m.V = MatrixXd::Zero(mesh.V.rows(), 3);
+  m.V.leftCols(mesh.V.cols()) = mesh.V;
+  return m;
+}
+
+}  // namespace
+
+Surface read_surface(const std::string& path) {
+  const std::string bytes = detail::read_file(path);
+  Surface s;
+  switch (sniff_surface(bytes, path)) {
+    case SurfaceFormat::kFreeSurfer:
+      s = detail::parse_freesurfer_surface(bytes, path);
+      break;
+    case SurfaceFormat::kPatch:
+      fail(path, "is a FreeSurfer patch (vertex subset without faces), not a surface",
+           "read it with read_freesurfer_patch and combine it with its surface (patch_mesh)");
+    case SurfaceFormat::kCurv:
+      fail(path, "is a FreeSurfer per-vertex (curv) file or a quad surface, not a triangle surface",
+           "give a triangle surface (lh.white, .surf.gii, .vtk, ...)");
+    case SurfaceFormat::kGifti: {
+      detail::GiftiContents g = detail::read_gifti(path);
+      if (!g.has_mesh)
+        fail(path, "GIFTI file has no pointset (intent 1008) and triangle (intent 1009) arrays",
+             "this is a data (func/shape/label) file; give a .surf.gii");
+      s.mesh = std::move(g.mesh);
+      s.format = "gifti";
+      s.space = g.dataspace;
+      s.to_scanner = g.to_scanner;
+      s.metadata = std::move(g.metadata);
+      if (!s.to_scanner.isIdentity()) {
+        s.c_ras = s.to_scanner.block<3, 1>(0, 3);
+        s.has_volume_geometry = s.to_scanner.block<3, 3>(0, 0).isIdentity(1e-9);
+      }
+      break;
+    }
+    case SurfaceFormat::kVtk: s.mesh = detail::read_vtk_family(path, "vtk"); s.format = "vtk"; break;
+    case SurfaceFormat::kVtp: s.mesh = detail::read_vtk_family(path, "vtp"); s.format = "vtp"; break;
+    case SurfaceFormat::kPly: s.mesh = detail::read_vtk_family(path, "ply"); s.format = "ply"; break;
+    case SurfaceFormat::kObj: s.mesh = detail::read_vtk_family(path, "obj"); s.format = "obj"; break;
+    case SurfaceFormat::kStl:
+      s.mesh = detail::read_vtk_family(path, "stl");
+      detail::merge_coincident_vertices(s.mesh);
+      s.format = "stl";
+      break;
+    case SurfaceFormat::kUnknown:
+      // No magic and no known extension: FreeSurfer names have none (lh.white), so parse it as one;
+      // its error says which magic number was found.
+      s = detail::parse_freesurfer_surface(bytes, path);
+      break;
+  }
+  if (s.mesh.num_vertices() == 0) fail(path, "surface has no vertices", "the file is empty or not a surface");
+  if (s.mesh.num_faces() == 0) fail(path, "surface has no triangles", "give a triangulated surface");
+  detail::validate_mesh(s.mesh, path, s.format);
+  if (s.space.empty()) s.space = "unknown";
+  return s;
+}
+
+void write_surface(const std::string& path, const TriMesh& mesh, const SurfaceWriteOptions& options) {
+  validate_for_writing(mesh, path);
+  const std::string format = output_format(path);
+  const TriMesh m3 = as_3d(mesh);
+  if (format == "gifti") {
+    detail::write_gifti_surface(path, m3, options);
+  } else if (format == "freesurfer") {
+    write_file_atomically(path, detail::serialize_freesurfer_surface(m3, options));
+  } else {
+    detail::write_vtk_family(path, m3, format);
+  }
+}
+
+Patch read_freesurfer_patch(const std::string& path) { return detail::parse_freesurfer_patch(detail::read_file(path), path); }
+
+void write_freesurfer_patch(const std::string& path, const std::vector<int>& vertices, const MatrixXd& positions) {
+  if (positions.rows() != static_cast<Eigen::Index>(vertices.size()) || positions.cols() < 2)
+    throw InputError(path + ": patch has " + std::to_string(vertices.size()) + " vertices but positions are " +
+                     std::to_string(positions.rows()) + "x" + std::to_string(positions.cols()) + "; nothing written");
+  for (const int v : vertices)
+    if (v < 0) throw InputError(path + ": negative vertex index " + std::to_string(v) + " in patch; nothing written");
+  if (!positions.allFinite()) throw InputError(path + ": non-finite patch coordinates; nothing written");
+  write_file_atomically(path, detail::serialize_freesurfer_patch(vertices, positions));
+}
+
+TriMesh patch_mesh(const TriMesh& parent, const Patch& patch) {
+  const int nv = parent.num_vertices();
+  std::vector<char> in_patch(nv, 0);
+  TriMesh out;
+  out.V = parent.V;
+  for (std::size_t i = 0; i < patch.vertices.size(); ++i) {
+    const int v = patch.vertices[i];
+    if (v < 0 || v >= nv)
+      throw InputError("patch: vertex " + std::to_string(v) + " is outside the surface's 0.." + std::to_string(nv - 1) +
+                       "; the patch belongs to another surface");
+    in_patch[v] = 1;
+    out.V.row(v) = patch.positions.row(static_cast<Eigen::Index>(i)).leftCols(std::min<Eigen::Index>(3, out.V.cols()));
+  }
+  std::vector<int> kept;
+  for (int f = 0; f < parent.num_faces(); ++f)
+    if (in_patch[parent.F(f, 0)] && in_patch[parent.F(f, 1)] && in_patch[parent.F(f, 2)]) kept.push_back(f);
+  out.F.resize(static_cast<Eigen::Index>(kept.size()), 3);
+  for (std::size_t i = 0; i < kept.size(); ++i) out.F.row(static_cast<Eigen::Index>(i)) = parent.F.row(kept[i]);
+  return out;
+}
+
+MatrixXd read_per_vertex_columns(const std::string& path, std::vector<std::string>* names, int expected_vertices) {
+  const std::string bytes = detail::read_file(path);
+  MatrixXd values;
+  std::vector<std::string> column_names;
+  if (detail::is_gzip(bytes) || detail::looks_like_gifti(bytes)) {
+    detail::GiftiContents g = detail::read_gifti(path);
+    if (g.columns.cols() == 0)
+      fail(path, "GIFTI file has no per-vertex data arrays (only geometry)", "give a .func.gii, .shape.gii or .label.gii file");
+    values = std::move(g.columns);
+    column_names = std::move(g.column_names);
+  } else if (detail::sniff_freesurfer(bytes) == detail::FreeSurferKind::kNewCurv) {
+    values = detail::parse_freesurfer_curv(bytes, path);
+    column_names = {detail::lower_filename(path)};
+  } else if (detail::sniff_freesurfer(bytes) == detail::FreeSurferKind::kTriangleSurface) {
+    fail(path, "is a FreeSurfer surface, not per-vertex data", "give a curv/thickness/sulc, GIFTI shape/func or text file");
+  } else if (is_text(bytes)) {
+    values = parse_text_values(bytes, path);
+    column_names = {detail::lower_filename(path)};
+  } else {
+    values = detail::parse_freesurfer_curv(bytes, path);  // old curv format, or a clear error
+    column_names = {detail::lower_filename(path)};
+  }
+  check_length(path, values.rows(), expected_vertices);
+  if (names) *names = std::move(column_names);
+  return values;
+}
+
+VectorXd read_per_vertex(const std::string& path, int expected_vertices, int column) {
+  const MatrixXd all = read_per_vertex_columns(path, nullptr, expected_vertices);
+  if (column < 0 || column >= all.cols())
+    fail(path, "has " + std::to_string(all.cols()) + " data column(s), column " + std::to_string(column) + " was asked for",
+         "choose a column between 0 and " + std::to_string(all.cols() - 1));
+  return all.col(column);
+}
+
+void write_per_vertex(const std::string& path, const MatrixXd& values, const FuncWriteOptions& options) {
+  if (!values.allFinite()) {
+    // NaN is legal in GIFTI func files (masked vertices) but not in curv; say so for curv only.
+    const std::string name = detail::lower_filename(path);
+    if (!(ends_with(name, ".gii") || ends_with(name, ".gii.gz")))
+      throw InputError(path + ": values contain NaN/Inf, which the FreeSurfer curv format cannot mark; write a .func.gii instead");
+  }
+  const std::string name = detail::lower_filename(path);
+  if (ends_with(name, ".gii") || ends_with(name, ".gii.gz")) {
+    const int intent = ends_with(name, ".shape.gii") || ends_with(name, ".shape.gii.gz") ? 2005 /*NIFTI_INTENT_SHAPE*/ : 0;
+    detail::write_gifti_columns(path, values, options, intent, nullptr);
+  } else if (ends_with(name, ".txt") || ends_with(name, ".csv")) {
+    std::ostringstream ss;
+    ss.precision(9);
+    for (Eigen::Index i = 0; i < values.rows(); ++i) ss << (values.cols() ? values(i, 0) : 0.0) << '\n';
+    write_file_atomically(path, ss.str());
+  } else {
+    if (values.cols() < 1) throw InputError(path + ": no values to write");
+    write_file_atomically(path, detail::serialize_freesurfer_curv(values.col(0)));
+  }
+}
+
+void write_label_gifti(const std::string& path, const VectorXi& labels, const std::map<int, std::string>& names,
+                       const FuncWriteOptions& options) {
+  std::map<int, std::string> table = names;
+  for (Eigen::Index i = 0; i < labels.size(); ++i)
+    if (!table.count(labels[i])) table[labels[i]] = labels[i] == 0 ? "???" : "label_" + std::to_string(labels[i]);
+  detail::write_gifti_columns(path, labels.cast<double>(), options, 1002 /*NIFTI_INTENT_LABEL*/, &table);
+}
+
+std::vector<int> read_region_vertices(const std::string& path, int expected_vertices) {
+  const std::string bytes = detail::read_file(path);
+  std::vector<int> vertices;
+  if (detail::looks_like_freesurfer_label(bytes) || (!bytes.empty() && bytes[0] == '#' && ends_with(detail::lower_filename(path), ".label"))) {
+    const Label label = detail::parse_freesurfer_label(bytes, path);
+    vertices = label.vertices;
+    if (expected_vertices >= 0) {
+      for (const int v : vertices)
+        if (v >= expected_vertices)
+          fail(path, "label vertex " + std::to_string(v) + " is outside the surface's " + std::to_string(expected_vertices) + " vertices",
+               "use the label that belongs to this surface");
+    }
+  } else {
+    bool labels = false;
+    MatrixXd values;
+    if (detail::is_gzip(bytes) || detail::looks_like_gifti(bytes)) {
+      detail::GiftiContents g = detail::read_gifti(path);
+      if (g.columns.cols() == 0) fail(path, "GIFTI file has no per-vertex data arrays", "give a .label.gii or a 0/1 .shape.gii mask");
+      labels = g.columns_are_labels;
+      values = g.columns.col(0);
+      check_length(path, values.rows(), expected_vertices);
+    } else {
+      values = read_per_vertex(path, expected_vertices);
+    }
+    // Label files: any non-zero key is inside. Masks: value > 0.5 (robust to float rounding).
+    for (Eigen::Index i = 0; i < values.rows(); ++i)
+      if (labels ? values(i, 0) != 0.0 : values(i, 0) > 0.5) vertices.push_back(static_cast<int>(i));
+  }
+  std::sort(vertices.begin(), vertices.end());
+  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+  if (vertices.empty()) fail(path, "region is empty (no vertex selected)", "check that this is the right label or mask");
+  return vertices;
+}
+
+Label read_freesurfer_label(const std::string& path) { return detail::parse_freesurfer_label(detail::read_file(path), path); }
+
+void write_freesurfer_label(const std::string& path, const Label& label) {
+  for (const int v : label.vertices)
+    if (v < 0) throw InputError(path + ": negative vertex index " + std::to_string(v) + " in label; nothing written");
+  write_file_atomically(path, detail::serialize_freesurfer_label(label));
+}
+
+}  // namespace authalic::io

@@ -1,0 +1,283 @@
+// Normative reference and patient comparison (analysis/normative.h): hand-computed z-scores,
+// exact merging, the age model against a direct least-squares fit, refusals, clusters.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "analysis/normative.h"
+#include "common/test_data.h"
+#include "core/error.h"
+
+namespace authalic::analysis {
+namespace {
+
+ElementTable make_table(ElementDomain domain, int k, const std::vector<std::string>& hemis, const std::string& id,
+                        const std::vector<double>& values, double age = std::nan("")) {
+  ElementTable t;
+  t.grid = element_grid(domain, k);
+  t.normalisation = "global";
+  t.units = "ratio to the global cortical mean";
+  t.subject_id = id;
+  t.age = age;
+  const int ne = t.grid.num_elements();
+  for (std::size_t b = 0; b < hemis.size(); ++b) {
+    ElementBlock block{hemis[b], {}};
+    for (int e = 0; e < ne; ++e) {
+      Element el;
+      el.id = e;
+      el.row = e / t.grid.cols;
+      el.col = e % t.grid.cols;
+      el.area_mm2 = 10.0 + e;
+      el.centroid = Eigen::Vector3d(e, -e, 2.0 * e);
+      el.value = values[b * ne + static_cast<std::size_t>(e)];
+      el.n_vertices = 3;
+      block.elements.push_back(el);
+    }
+    t.blocks.push_back(block);
+  }
+  return t;
+}
+
+// Deterministic pseudo-random numbers for the tests.
+double noise(int i, int j) { return std::sin(12.9898 * i + 78.233 * j) * 0.5; }
+
+TEST(Normative, ZScoresEqualHandComputationOnATinyTable) {
+  // K = 2 square, 4 elements; three controls.
+  const std::vector<std::vector<double>> controls = {{1.0, 2.0, 3.0, 4.0}, {2.0, 2.0, 5.0, 4.5}, {3.0, 2.0, 4.0, 5.0}};
+  NormativeReference ref;
+  for (std::size_t s = 0; s < controls.size(); ++s) {
+    const ElementTable t = make_table(ElementDomain::Square, 2, {"left"}, "c" + std::to_string(s), controls[s]);
+    if (s == 0) ref = empty_reference_like(t);
+    add_subject(ref, t, "c" + std::to_string(s) + ".csv");
+  }
+  EXPECT_FALSE(ref.age_model);  // no ages
+  // Element 0: mean 2, SD 1. Element 1: SD 0 (no z). Element 2: mean 4, SD 1. Element 3: mean 4.5, SD 0.5.
+  EXPECT_DOUBLE_EQ(ref.mean[0], 2.0);
+  EXPECT_DOUBLE_EQ(ref.sd(0), 1.0);
+  EXPECT_DOUBLE_EQ(ref.sd(1), 0.0);
+  EXPECT_DOUBLE_EQ(ref.sd(3), 0.5);
+  const ElementTable patient = make_table(ElementDomain::Square, 2, {"left"}, "p", {0.0, 2.0, 5.5, 3.0});
+  const Comparison c = compare_to_reference(ref, patient);
+  EXPECT_DOUBLE_EQ(c.z[0], -2.0);   // (0 - 2) / 1: hypometabolic at exactly the threshold
+  EXPECT_TRUE(std::isnan(c.z[1]));  // SD 0
+  EXPECT_DOUBLE_EQ(c.z[2], 1.5);    // (5.5 - 4) / 1
+  EXPECT_DOUBLE_EQ(c.z[3], -3.0);   // (3 - 4.5) / 0.5
+  EXPECT_EQ(c.flag, (std::vector<int>{-1, 0, 0, -1}));
+  EXPECT_EQ(c.num_hypo, 2);
+  EXPECT_EQ(c.num_hyper, 0);
+  EXPECT_EQ(c.num_compared, 3);
+  // Elements 0 (row 0, col 0) and 3 (row 1, col 1) touch diagonally: one cluster.
+  ASSERT_EQ(c.clusters.size(), 1u);
+  EXPECT_EQ(c.clusters[0].elements, (std::vector<int>{0, 3}));
+  EXPECT_DOUBLE_EQ(c.clusters[0].peak_z, -3.0);
+  EXPECT_EQ(c.clusters[0].peak_element, 3);
+  EXPECT_DOUBLE_EQ(c.clusters[0].area_mm2, 10.0 + 13.0);
+  EXPECT_DOUBLE_EQ(c.clusters[0].mean_z, -2.5);
+  EXPECT_EQ(c.cluster, (std::vector<int>{1, 0, 0, 1}));
+  // A higher threshold flags only element 3.
+  CompareOptions o;
+  o.threshold = 2.5;
+  EXPECT_EQ(compare_to_reference(ref, patient, o).flag, (std::vector<int>{0, 0, 0, -1}));
+}
+
+NormativeReference build_from(const std::vector<ElementTable>& tables, std::size_t first, std::size_t last) {
+  NormativeReference r = empty_reference_like(tables[first]);
+  for (std::size_t s = first; s < last; ++s) add_subject(r, tables[s], tables[s].subject_id + ".csv");
+  return r;
+}
+
+std::vector<ElementTable> cohort(int subjects, bool with_ages) {
+  std::vector<ElementTable> tables;
+  for (int s = 0; s < subjects; ++s) {
+    std::vector<double> v(2 * 16);
+    const double age = 50.0 + 2.5 * s + 3 * noise(s, 99);
+    for (int i = 0; i < 32; ++i) v[static_cast<std::size_t>(i)] = 1.0 + 0.01 * i - 0.004 * age + 0.05 * noise(s, i);
+    if (s == 3) v[5] = std::nan("");  // a missing element value
+    tables.push_back(make_table(ElementDomain::Square, 4, {"left", "right"}, "s" + std::to_string(s), v,
+                                with_ages ? age : std::nan("")));
+  }
+  return tables;
+}
+
+TEST(Normative, MergingTwoHalvesEqualsTheWhole) {
+  const auto tables = cohort(21, true);
+  const NormativeReference whole = build_from(tables, 0, 21);
+  const NormativeReference half_a = build_from(tables, 0, 10), half_b = build_from(tables, 10, 21);
+  const NormativeReference merged = merge_references(half_a, half_b);
+  ASSERT_TRUE(merged.age_model);
+  EXPECT_EQ(merged.subjects.size(), 21u);
+  EXPECT_EQ(merged.subjects[12].id, "s12");
+  for (int i = 0; i < whole.num_values(); ++i) {
+    EXPECT_EQ(merged.n[i], whole.n[i]);
+    EXPECT_NEAR(merged.mean[i], whole.mean[i], 1e-14 * std::abs(whole.mean[i]));
+    EXPECT_NEAR(merged.m2[i], whole.m2[i], 1e-10 * whole.m2[i]);
+    EXPECT_NEAR(merged.age_mean[i], whole.age_mean[i], 1e-13 * whole.age_mean[i]);
+    EXPECT_NEAR(merged.age_m2[i], whole.age_m2[i], 1e-10 * whole.age_m2[i]);
+    EXPECT_NEAR(merged.comoment[i], whole.comoment[i], 1e-9 * std::abs(whole.comoment[i]));
+  }
+  EXPECT_EQ(whole.n[5], 20);  // subject 3's NaN at element 5 is not counted
+  // Merging is also exact in the other order and with an empty side.
+  const NormativeReference reversed = merge_references(half_b, half_a);
+  EXPECT_NEAR(reversed.m2[7], whole.m2[7], 1e-10 * whole.m2[7]);
+  // Through the file format (shortest round-trip numbers): bit for bit.
+  const std::string dir = test::temp_dir("normative_merge");
+  write_reference(dir + "/ref.json", merged);
+  const NormativeReference back = read_reference(dir + "/ref.json");
+  EXPECT_EQ(back.mean, merged.mean);
+  EXPECT_EQ(back.m2, merged.m2);
+  EXPECT_EQ(back.comoment, merged.comoment);
+  EXPECT_EQ(back.subjects.size(), 21u);
+  EXPECT_EQ(back.subjects[4].age, merged.subjects[4].age);
+}
+
+TEST(Normative, AgeModelEqualsDirectLeastSquaresFit) {
+  const auto tables = cohort(15, true);
+  const NormativeReference ref = build_from(tables, 0, 15);
+  const int e = 9;
+  // Direct least squares on element 9 (all subjects have it).
+  double sa = 0, sy = 0;
+  for (const auto& t : tables) {
+    sa += t.age;
+    sy += t.blocks[0].elements[e].value;
+  }
+  const double ma = sa / 15, my = sy / 15;
+  double saa = 0, say = 0, syy = 0;
+  for (const auto& t : tables) {
+    const double da = t.age - ma, dy = t.blocks[0].elements[e].value - my;
+    saa += da * da;
+    say += da * dy;
+    syy += dy * dy;
+  }
+  const double beta = say / saa;
+  const double sd_res = std::sqrt((syy - beta * say) / 13);
+  ElementTable patient = tables[0];
+  patient.subject_id = "patient";
+  patient.age = 71.0;
+  patient.blocks[0].elements[e].value = 0.8;
+  const Comparison c = compare_to_reference(ref, patient);
+  ASSERT_TRUE(c.age_adjusted);
+  const double expected = my + beta * (71.0 - ma);
+  EXPECT_NEAR(c.expected[e], expected, 1e-12);
+  EXPECT_NEAR(c.sd[e], sd_res, 1e-12);
+  EXPECT_NEAR(c.z[e], (0.8 - expected) / sd_res, 1e-9);
+  // Without the age model: the plain mean and SD.
+  CompareOptions o;
+  o.use_age = false;
+  const Comparison plain = compare_to_reference(ref, patient, o);
+  EXPECT_FALSE(plain.age_adjusted);
+  EXPECT_NEAR(plain.z[e], (0.8 - my) / std::sqrt(syy / 14), 1e-9);
+  // A control without an age drops the age model.
+  NormativeReference mixed = ref;
+  ElementTable ageless = tables[1];
+  ageless.subject_id = "ageless";
+  ageless.age = std::nan("");
+  add_subject(mixed, ageless, "ageless.csv");
+  EXPECT_FALSE(mixed.age_model);
+  EXPECT_TRUE(mixed.comoment.empty());
+}
+
+TEST(Normative, IncompatibleInputsAreRefusedWithAClearError) {
+  const auto tables = cohort(4, false);
+  NormativeReference ref = build_from(tables, 0, 3);
+  auto expect_refusal = [&](const ElementTable& t, const std::string& words) {
+    try {
+      NormativeReference r = ref;
+      add_subject(r, t, "other.csv");
+      FAIL() << "no error for " << words;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  ElementTable t = tables[3];
+  t.normalisation = "reference-region";
+  t.units = "SUVR";
+  expect_refusal(t, "other.csv: the intensity normalisation is reference-region but the reference has global");
+  t = make_table(ElementDomain::Square, 2, {"left", "right"}, "x", std::vector<double>(8, 1.0));
+  expect_refusal(t, "other.csv: K is 2 but the reference has 4");
+  t = make_table(ElementDomain::Square, 4, {"left"}, "x", std::vector<double>(16, 1.0));
+  t.normalisation = "global";
+  t.units = ref.units;
+  expect_refusal(t, "the hemisphere list is left but the reference has left,right");
+  t = tables[1];
+  expect_refusal(t, "subject 's1' is already in the reference");
+  // Merging references of different K, or sharing a subject, is refused too.
+  const NormativeReference other = build_from({make_table(ElementDomain::Square, 2, {"left", "right"}, "y", std::vector<double>(8, 1.0))}, 0, 1);
+  EXPECT_THROW(merge_references(ref, other), InputError);
+  EXPECT_THROW(merge_references(ref, build_from(tables, 2, 4)), InputError);
+  // Comparing a patient of another domain.
+  const ElementTable rect = make_table(ElementDomain::Rectangle, 4, {"left", "right"}, "p", std::vector<double>(64, 1.0));
+  EXPECT_THROW(compare_to_reference(ref, rect), InputError);
+  // A corrupt or future reference file.
+  const std::string dir = test::temp_dir("normative_refusal");
+  std::string json = reference_to_json(ref);
+  const std::string v1 = "\"version\": 1";
+  ASSERT_NE(json.find(v1), std::string::npos);
+  std::string v2 = json;
+  v2.replace(v2.find(v1), v1.size(), "\"version\": 2");
+  try {
+    reference_from_json(v2, "ref.json");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("ref.json: reference format version 2 is not supported"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(reference_from_json("{\"format\": \"something\"}", "x.json"), InputError);
+  EXPECT_THROW(reference_from_json("not json", "x.json"), InputError);
+}
+
+TEST(Normative, ClustersFollowTheDomainsNeighbourhoods) {
+  // 4 x 8 grids (rectangle and sphere at K = 4); flags in row 1.
+  std::vector<int> flags(32, 0);
+  flags[1 * 8 + 3] = -1;  // column 3: left of the rectangle's seam (K = 4)
+  flags[1 * 8 + 4] = -1;  // column 4: right of it
+  flags[1 * 8 + 0] = 1;   // column 0 (hyper)
+  flags[1 * 8 + 7] = 1;   // column 7: touches column 0 only on the sphere
+  flags[2 * 8 + 5] = -1;  // diagonal neighbour of (1, 4)
+  int count = 0;
+  const auto square_like = label_clusters(element_grid(ElementDomain::Rectangle, 4), flags, &count);
+  EXPECT_EQ(count, 4);  // {3}, {4, (2,5)}, {0}, {7}
+  EXPECT_NE(square_like[11], square_like[12]);
+  EXPECT_EQ(square_like[12], square_like[21]);
+  EXPECT_NE(square_like[8], square_like[15]);
+  const auto sphere = label_clusters(element_grid(ElementDomain::Sphere, 4), flags, &count);
+  EXPECT_EQ(count, 2);  // {3, 4, (2,5)} across longitude; {0, 7} wrapping around
+  EXPECT_EQ(sphere[11], sphere[12]);
+  EXPECT_EQ(sphere[8], sphere[15]);
+  // Opposite signs never join.
+  std::vector<int> mixed(16, 0);
+  mixed[0] = -1;
+  mixed[1] = 1;
+  label_clusters(element_grid(ElementDomain::Square, 4), mixed, &count);
+  EXPECT_EQ(count, 2);
+}
+
+TEST(Normative, BuildFromFilesStreamsAndIsThreadIndependent) {
+  const auto tables = cohort(20, true);
+  const std::string dir = test::temp_dir("normative_build");
+  std::vector<std::string> paths;
+  for (const auto& t : tables) {
+    paths.push_back(dir + "/" + t.subject_id + "_elements.csv");
+    write_element_table(paths.back(), t);
+  }
+  omp_set_num_threads(1);
+  const NormativeReference a = build_reference(paths);
+  omp_set_num_threads(2);
+  const NormativeReference b = build_reference(paths);
+  EXPECT_EQ(reference_to_json(a), reference_to_json(b));
+  const NormativeReference direct = build_from(tables, 0, 20);
+  EXPECT_EQ(a.mean, direct.mean);
+  EXPECT_EQ(a.m2, direct.m2);
+  EXPECT_EQ(a.subjects[19].table, paths[19]);
+  // A bad table names itself.
+  std::ofstream(dir + "/s7_elements.csv") << "garbage\n";
+  try {
+    build_reference(paths);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("s7_elements.csv:1: unexpected header"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace authalic::analysis

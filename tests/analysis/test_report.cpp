@@ -1,0 +1,289 @@
+// HTML report: a well-formed, self-contained page with every required section, embedded pictures
+// that decode as PNG, escaped text, and deterministic bytes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "analysis/report.h"
+#include "common/test_data.h"
+
+namespace {
+
+namespace an = authalic::analysis;
+using authalic::MatrixXd;
+using authalic::MatrixXi;
+using authalic::VectorXd;
+using authalic::VectorXi;
+
+// A tiny HTML/XML structure checker: every element closed in order (void elements must be written
+// self-closed), attributes quoted. Collects ids, tag counts and <img> sources.
+struct ParsedPage {
+  bool ok = true;
+  std::string error;
+  std::map<std::string, int> tag_count;
+  std::set<std::string> ids;
+  std::vector<std::map<std::string, std::string>> images;
+  std::vector<std::string> section_ids;  // in order
+};
+
+ParsedPage parse_page(const std::string& html) {
+  ParsedPage page;
+  std::vector<std::string> stack;
+  std::size_t i = 0;
+  auto fail = [&](const std::string& why) {
+    page.ok = false;
+    page.error = why + " at byte " + std::to_string(i);
+  };
+  while (page.ok) {
+    const std::size_t lt = html.find('<', i);
+    if (lt == std::string::npos) break;
+    i = lt;
+    if (html.compare(i, 9, "<!DOCTYPE") == 0) {
+      i = html.find('>', i) + 1;
+      continue;
+    }
+    const std::size_t gt = html.find('>', i);
+    if (gt == std::string::npos) {
+      fail("unterminated tag");
+      break;
+    }
+    std::string tag = html.substr(i + 1, gt - i - 1);
+    i = gt + 1;
+    if (!tag.empty() && tag[0] == '/') {
+      const std::string name = tag.substr(1);
+      if (stack.empty() || stack.back() != name) {
+        fail("</" + name + "> closes <" + (stack.empty() ? std::string("nothing") : stack.back()) + ">");
+        break;
+      }
+      stack.pop_back();
+      continue;
+    }
+    const bool self_closed = !tag.empty() && tag.back() == '/';
+    if (self_closed) tag.pop_back();
+    std::size_t p = 0;
+    while (p < tag.size() && !std::isspace(static_cast<unsigned char>(tag[p]))) ++p;
+    const std::string name = tag.substr(0, p);
+    std::map<std::string, std::string> attrs;
+    while (p < tag.size()) {
+      while (p < tag.size() && std::isspace(static_cast<unsigned char>(tag[p]))) ++p;
+      if (p >= tag.size()) break;
+      const std::size_t eq = tag.find('=', p);
+      if (eq == std::string::npos || eq + 1 >= tag.size() || tag[eq + 1] != '"') {
+        fail("unquoted attribute in <" + name + ">");
+        break;
+      }
+      const std::size_t end = tag.find('"', eq + 2);
+      if (end == std::string::npos) {
+        fail("unterminated attribute in <" + name + ">");
+        break;
+      }
+      attrs[tag.substr(p, eq - p)] = tag.substr(eq + 2, end - eq - 2);
+      p = end + 1;
+    }
+    page.tag_count[name]++;
+    if (attrs.count("id")) page.ids.insert(attrs["id"]);
+    if (name == "section") page.section_ids.push_back(attrs["id"]);
+    if (name == "img") page.images.push_back(attrs);
+    static const std::set<std::string> void_elements = {"meta", "img", "br", "hr", "link", "input"};
+    if (void_elements.count(name) && !self_closed) {
+      fail("<" + name + "> is not self-closed");
+      break;
+    }
+    if (!self_closed) {
+      stack.push_back(name);
+      if (name == "style" || name == "script") {  // raw text up to the closing tag
+        const std::size_t close = html.find("</" + name + ">", i);
+        if (close == std::string::npos) {
+          fail("unterminated <" + name + ">");
+          break;
+        }
+        i = close;
+      }
+    }
+  }
+  if (page.ok && !stack.empty()) {
+    page.ok = false;
+    page.error = "unclosed <" + stack.back() + ">";
+  }
+  return page;
+}
+
+// A planar grid of n x n vertices on [0,1]^2 (flat map) and a bump in 3D (surface).
+void grid_mesh(int n, MatrixXd* uv, MatrixXd* V, MatrixXi* F) {
+  uv->resize(n * n, 2);
+  V->resize(n * n, 3);
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double u = double(i) / (n - 1), v = double(j) / (n - 1);
+      uv->row(j * n + i) << u, v;
+      V->row(j * n + i) << -40.0 - 10.0 * std::exp(-((u - 0.5) * (u - 0.5) + (v - 0.5) * (v - 0.5)) * 8), 100 * u - 50, 80 * v - 40;
+    }
+  }
+  F->resize(2 * (n - 1) * (n - 1), 3);
+  int f = 0;
+  for (int j = 0; j + 1 < n; ++j) {
+    for (int i = 0; i + 1 < n; ++i) {
+      const int a = j * n + i, b = a + 1, c = a + n, d = c + 1;
+      F->row(f++) << a, b, d;
+      F->row(f++) << a, d, c;
+    }
+  }
+}
+
+an::ReportData example_report(bool normative) {
+  an::ReportData d;
+  d.subject_id = "sub-<01>&";
+  d.subject_info = {{"PET", "sub-01_pet.nii.gz"}, {"age", "67"}};
+  d.parameters = {{"sampling", "normal projection, 10 mm inward"}, {"normalisation", "global cortical mean"}, {"K", "8"}};
+  d.software = "authalic test";
+  for (bool left : {true, false}) {
+    an::ReportHemisphere h;
+    h.name = left ? "left" : "right";
+    h.left = left;
+    grid_mesh(17, &h.flat_uv, &h.surface_V, &h.faces);
+    if (!left) h.surface_V.col(0) *= -1;
+    h.grid_cols = h.grid_rows = 8;
+    h.pet = h.flat_uv.col(0).array() + 0.5;
+    h.element_of_vertex.resize(h.flat_uv.rows());
+    for (int v = 0; v < h.flat_uv.rows(); ++v) {
+      const int col = std::min(7, static_cast<int>(h.flat_uv(v, 0) * 8)), row = std::min(7, static_cast<int>(h.flat_uv(v, 1) * 8));
+      h.element_of_vertex(v) = row * 8 + col;
+    }
+    h.element_pet.assign(64, 1.0);
+    if (normative) {
+      h.element_z.assign(64, 0.0);
+      h.element_z[3 * 8 + 4] = -3.5;
+    }
+    h.distortion = {{"flipped triangles", "0"}, {"element-area CV (K=8)", "0.004"}};
+    d.hemispheres.push_back(h);
+  }
+  if (normative) {
+    d.normative.present = true;
+    d.normative.num_subjects = 20;
+    d.normative.normalisation = "global cortical mean";
+    d.normative.domain = "square, K = 8";
+    an::ReportCluster c;
+    c.id = 1;
+    c.hemisphere = "left";
+    c.sign = "hypo";
+    c.num_elements = 1;
+    c.area_mm2 = 250;
+    c.peak_z = -3.5;
+    c.mean_z = -3.5;
+    c.peak_row = 3;
+    c.peak_col = 4;
+    d.clusters = {c, c};
+    d.clusters[1].id = 2;
+    d.clusters[1].hemisphere = "right";
+  }
+  return d;
+}
+
+TEST(Base64, Rfc4648Vectors) {
+  auto enc = [](const std::string& s) { return an::base64_encode(std::vector<std::uint8_t>(s.begin(), s.end())); };
+  EXPECT_EQ(enc(""), "");
+  EXPECT_EQ(enc("f"), "Zg==");
+  EXPECT_EQ(enc("fo"), "Zm8=");
+  EXPECT_EQ(enc("foo"), "Zm9v");
+  EXPECT_EQ(enc("foob"), "Zm9vYg==");
+  EXPECT_EQ(enc("fooba"), "Zm9vYmE=");
+  EXPECT_EQ(enc("foobar"), "Zm9vYmFy");
+  const std::vector<std::uint8_t> bytes = {0, 255, 128, 7, 63, 200, 1};
+  EXPECT_EQ(an::base64_decode(an::base64_encode(bytes)), bytes);
+  EXPECT_THROW(an::base64_decode("Zm9"), std::invalid_argument);
+  EXPECT_THROW(an::base64_decode("Zm9*"), std::invalid_argument);
+}
+
+TEST(Report, WellFormedSelfContainedWithAllSections) {
+  const std::string html = an::report_html(example_report(true));
+  ParsedPage page = parse_page(html);
+  ASSERT_TRUE(page.ok) << page.error;
+  EXPECT_EQ(page.tag_count["html"], 1);
+  EXPECT_EQ(page.tag_count["head"], 1);
+  EXPECT_EQ(page.tag_count["body"], 1);
+  EXPECT_EQ(page.tag_count["title"], 1);
+  for (const char* id : {"subject", "parameters", "flat-maps", "surface-views", "clusters", "normative", "distortion"}) {
+    EXPECT_TRUE(page.ids.count(id)) << "missing section " << id;
+  }
+  // Nothing is fetched from elsewhere.
+  EXPECT_EQ(html.find("http://"), std::string::npos);
+  EXPECT_EQ(html.find("https://"), std::string::npos);
+  EXPECT_EQ(page.tag_count["script"], 0);
+  EXPECT_EQ(page.tag_count["link"], 0);
+  // Text is escaped.
+  EXPECT_NE(html.find("sub-&lt;01&gt;&amp;"), std::string::npos);
+  EXPECT_EQ(html.find("sub-<01>"), std::string::npos);
+  // The cluster table has a header and one row per cluster.
+  const std::size_t clusters = html.find("id=\"clusters\"");
+  const std::size_t end = html.find("</section>", clusters);
+  int rows = 0;
+  for (std::size_t p = html.find("<tr>", clusters); p < end; p = html.find("<tr>", p + 1)) ++rows;
+  EXPECT_EQ(rows, 3);
+  EXPECT_NE(html.find("control subjects (n)</th><td>20"), std::string::npos);
+}
+
+TEST(Report, EmbeddedImagesDecodeAsPng) {
+  const std::string html = an::report_html(example_report(true));
+  ParsedPage page = parse_page(html);
+  ASSERT_TRUE(page.ok) << page.error;
+  // Per hemisphere: PET flat map, z flat map, PET element image; plus one 3D view each.
+  EXPECT_EQ(page.images.size(), 8u);
+  const std::string dir = authalic::test::temp_dir("report_images");
+  int k = 0;
+  for (const auto& img : page.images) {
+    const std::string& src = img.at("src");
+    const std::string prefix = "data:image/png;base64,";
+    ASSERT_EQ(src.compare(0, prefix.size(), prefix), 0) << "image " << k << " is not an embedded PNG";
+    const std::vector<std::uint8_t> png = an::base64_decode(src.substr(prefix.size()));
+    ASSERT_GT(png.size(), 8u);
+    EXPECT_EQ(png[0], 0x89);
+    EXPECT_EQ(png[1], 'P');
+    EXPECT_EQ(png[2], 'N');
+    EXPECT_EQ(png[3], 'G');
+    const std::string path = dir + "/img" + std::to_string(k++) + ".png";
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+    const authalic::io::RgbImage decoded = authalic::io::read_png(path);
+    EXPECT_EQ(std::to_string(decoded.width), img.at("width"));
+    EXPECT_EQ(std::to_string(decoded.height), img.at("height"));
+    EXPECT_FALSE(img.at("alt").empty());
+  }
+}
+
+TEST(Report, WithoutNormativeSaysSoAndShowsPet) {
+  const std::string html = an::report_html(example_report(false));
+  ParsedPage page = parse_page(html);
+  ASSERT_TRUE(page.ok) << page.error;
+  EXPECT_NE(html.find("No normative reference was given"), std::string::npos);
+  EXPECT_EQ(page.images.size(), 6u);  // PET flat + PET elements + 3D (PET) per hemisphere
+  for (const char* id : {"subject", "parameters", "flat-maps", "surface-views", "clusters", "normative", "distortion"}) {
+    EXPECT_TRUE(page.ids.count(id)) << "missing section " << id;
+  }
+}
+
+TEST(Report, DeterministicAndWrittenAtomically) {
+  const an::ReportData d = example_report(true);
+  const std::string a = an::report_html(d);
+  EXPECT_EQ(a, an::report_html(d));
+  const std::string path = authalic::test::temp_dir("report_write") + "/report.html";
+  an::write_report(path, d);
+  std::ifstream f(path, std::ios::binary);
+  std::ostringstream s;
+  s << f.rdbuf();
+  EXPECT_EQ(s.str(), a);
+}
+
+TEST(Report, RobustRangeIgnoresOutliersAndNan) {
+  VectorXd v(102);
+  for (int i = 0; i < 100; ++i) v(i) = i;
+  v(100) = 1e9;
+  v(101) = std::nan("");
+  const auto [lo, hi] = an::robust_range(v);
+  EXPECT_NEAR(lo, 2.0, 1.0);
+  EXPECT_NEAR(hi, 98.0, 1.5);
+}
+
+}  // namespace

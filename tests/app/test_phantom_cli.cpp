@@ -1,0 +1,72 @@
+// `authalic phantom` and `authalic render` from the command line: outputs, JSON summary, errors.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "common/test_data.h"
+#include "io/image_io.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using authalic::test::authalic_binary;
+using authalic::test::run_command;
+
+TEST(PhantomCli, WritesACohortAndASummary) {
+  const std::string out = authalic::test::temp_dir("phantom_cli") + "/cohort";
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " phantom " + out +
+                            " --synthetic --controls 2 --patients 1 --seed 9 --voxel-size 4 --json 2>/dev/null",
+                        &output),
+            0)
+      << output;
+  const auto j = nlohmann::json::parse(output);
+  EXPECT_EQ(j.at("source"), "synthetic");
+  EXPECT_EQ(j.at("controls"), 2);
+  EXPECT_EQ(j.at("patients"), 1);
+  EXPECT_DOUBLE_EQ(j.at("region_depth_fraction").get<double>(), 0.25);
+  EXPECT_GT(j.at("region_area_mm2_per_hemisphere").get<double>(), 500.0);
+  EXPECT_TRUE(fs::exists(out + "/cohort.csv"));
+  EXPECT_TRUE(fs::exists(out + "/sub-patient01/sub-patient01_pet.nii.gz"));
+  EXPECT_TRUE(fs::exists(out + "/truth/lesion.json"));
+}
+
+TEST(PhantomCli, BadArgumentsAreInputErrors) {
+  std::string output;
+  EXPECT_EQ(run_command(authalic_binary() + " phantom /tmp/x --controls -3", &output), 2) << output;
+  EXPECT_EQ(run_command(authalic_binary() + " phantom /tmp/x --depth 1.5", &output), 2) << output;
+  EXPECT_EQ(run_command(authalic_binary() + " phantom /tmp/x --controls 0 --patients 0 --synthetic", &output), 2) << output;
+  EXPECT_NE(output.find("at least one subject"), std::string::npos) << output;
+  EXPECT_EQ(run_command(authalic_binary() + " phantom /tmp/x --shared /nonexistent", &output), 2) << output;
+  EXPECT_NE(output.find("/nonexistent"), std::string::npos) << output;
+  // A file where the folder should be.
+  const std::string dir = authalic::test::temp_dir("phantom_cli_file");
+  std::ofstream(dir + "/occupied") << "x";
+  EXPECT_EQ(run_command(authalic_binary() + " phantom " + dir + "/occupied --synthetic", &output), 2) << output;
+  EXPECT_NE(output.find("occupied"), std::string::npos) << output;
+}
+
+TEST(RenderCli, DrawsFlatMapsSideBySide) {
+  const std::string dir = authalic::test::temp_dir("render_cli");
+  // The synthetic white surface seen from the side as a "map" is enough to exercise the command.
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " phantom " + dir + "/c --synthetic --controls 1 --patients 0 --voxel-size 6 -q", &output),
+            0)
+      << output;
+  const std::string png = dir + "/maps.png";
+  ASSERT_EQ(run_command(authalic_binary() + " render " + png + " " + dir + "/c/surf/lh.white " + dir +
+                            "/c/surf/lh.pial --grid 4 --caption one --caption two --width 300 -q",
+                        &output),
+            0)
+      << output;
+  const authalic::io::RgbImage img = authalic::io::read_png(png);
+  EXPECT_GT(img.width, 2 * 300);
+  EXPECT_EQ(run_command(authalic_binary() + " render " + png + " /nonexistent.gii", &output), 2) << output;
+  EXPECT_EQ(run_command(authalic_binary() + " render " + png + " " + dir + "/c/surf/lh.white --colormap jet", &output), 2)
+      << output;
+  EXPECT_NE(output.find("jet"), std::string::npos) << output;
+}
+
+}  // namespace

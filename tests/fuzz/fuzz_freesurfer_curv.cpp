@@ -1,0 +1,12 @@
+// libFuzzer target: FreeSurfer curv parser (new and old formats).
+#include "fuzz/fuzz_common.h"
+#include "io/surface_formats.h"
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  authalic::fuzz::set_limits();
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  return authalic::fuzz::run(data, size, [](const std::string& b) { authalic::io::detail::parse_freesurfer_curv(b, "fuzz.curv"); });
+}

@@ -1,0 +1,213 @@
+// FreeSurfer binary surfaces, curv, label and patch files: round trips through our writers, and
+// cross-checks against nibabel.freesurfer (an independent implementation of the same layouts).
+#include <gtest/gtest.h>
+
+#include "io/io_test_util.h"
+#include "io/io_internal.h"
+#include "io/surface_formats.h"
+#include "io/surface_io.h"
+
+using namespace authalic;
+using namespace authalic::io;
+using namespace authalic::test;
+
+namespace {
+
+VolumeGeometry sample_geometry() {
+  VolumeGeometry vg;
+  vg.valid = true;
+  vg.filename = "/subjects/bert/mri/filled-pretess255.mgz";
+  vg.volume = {256, 256, 256};
+  vg.voxelsize = {1, 1, 1};
+  vg.xras = {-1, 0, 0};
+  vg.yras = {0, 0, -1};
+  vg.zras = {0, 1, 0};
+  vg.cras = {5.25, -18.5, 22.125};
+  return vg;
+}
+
+}  // namespace
+
+TEST(FreeSurferSurface, RoundTripWithVolumeGeometry) {
+  const std::string dir = temp_dir("fs_surface_roundtrip");
+  const TriMesh m = octahedron();
+  SurfaceWriteOptions opt;
+  opt.volume_geometry = sample_geometry();
+  write_surface(dir + "/lh.white", m, opt);
+  const Surface s = read_surface(dir + "/lh.white");
+  EXPECT_EQ(s.format, "freesurfer");
+  EXPECT_EQ(s.space, "tkregister RAS");
+  EXPECT_TRUE(s.mesh.V.isApprox(m.V, 1e-6));  // float32 storage
+  EXPECT_EQ(s.mesh.F, m.F);
+  ASSERT_TRUE(s.has_volume_geometry);
+  EXPECT_TRUE(s.c_ras.isApprox(Eigen::Vector3d(5.25, -18.5, 22.125)));
+  EXPECT_EQ(s.volume_geometry.filename, opt.volume_geometry.filename);
+  EXPECT_EQ(s.volume_geometry.volume, opt.volume_geometry.volume);
+  EXPECT_TRUE(s.volume_geometry.yras.isApprox(Eigen::Vector3d(0, 0, -1)));
+  // scanner = tkr + c_ras
+  const Eigen::Vector4d tkr(1, 2, 3, 1);
+  EXPECT_TRUE((s.to_scanner * tkr).isApprox(Eigen::Vector4d(6.25, -16.5, 25.125, 1)));
+  EXPECT_EQ(list_dir(dir), std::vector<std::string>{"lh.white"});  // no temporary left behind
+}
+
+TEST(FreeSurferSurface, WithoutFooterHasIdentityTransform) {
+  const std::string dir = temp_dir("fs_surface_nofooter");
+  write_surface(dir + "/rh.pial", octahedron());
+  const Surface s = read_surface(dir + "/rh.pial");
+  EXPECT_FALSE(s.has_volume_geometry);
+  EXPECT_TRUE(s.to_scanner.isIdentity());
+}
+
+TEST(FreeSurferSurface, FlatMeshGetsZeroZ) {
+  const std::string dir = temp_dir("fs_surface_flat");
+  TriMesh m = octahedron();
+  m.V = m.V.leftCols(2).eval();
+  write_surface(dir + "/lh.flat", m);
+  const Surface s = read_surface(dir + "/lh.flat");
+  EXPECT_TRUE(s.mesh.V.leftCols(2).isApprox(m.V));
+  EXPECT_EQ(s.mesh.V.col(2).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(FreeSurferSurface, ReadsNibabelWrittenSurfaceAndNibabelReadsOurs) {
+  AUTHALIC_REQUIRE_NIBABEL();
+  const std::string dir = temp_dir("fs_surface_nibabel");
+  // nibabel writes a surface with a volume_info footer; we read it.
+  run_python(dir, R"(
+from collections import OrderedDict
+v = np.array([[1.5,2.5,3.5],[-4.0,5.0,6.0],[7.0,-8.0,9.25],[0.5,0.25,-0.125]], dtype=np.float32)
+f = np.array([[0,1,2],[0,2,3],[0,3,1],[1,3,2]], dtype=np.int32)
+vi = OrderedDict([('head', np.array([2, 0, 20], dtype=np.int32)), ('valid', '1  # volume info valid'),
+  ('filename', 'orig.mgz'), ('volume', np.array([256,256,256])), ('voxelsize', np.array([1.,1.,1.])),
+  ('xras', np.array([-1.,0.,0.])), ('yras', np.array([0.,0.,-1.])), ('zras', np.array([0.,1.,0.])),
+  ('cras', np.array([1.25,-2.5,3.75]))])
+nib.freesurfer.write_geometry(')" + dir + R"(/nib.white', v, f, create_stamp='created by nibabel', volume_info=vi)
+)");
+  const Surface s = read_surface(dir + "/nib.white");
+  ASSERT_EQ(s.mesh.num_vertices(), 4);
+  ASSERT_EQ(s.mesh.num_faces(), 4);
+  EXPECT_DOUBLE_EQ(s.mesh.V(2, 2), 9.25);
+  EXPECT_EQ(s.mesh.F(3, 1), 3);
+  ASSERT_TRUE(s.has_volume_geometry);
+  EXPECT_TRUE(s.c_ras.isApprox(Eigen::Vector3d(1.25, -2.5, 3.75)));
+  EXPECT_EQ(s.volume_geometry.filename, "orig.mgz");
+
+  // nibabel reads what we write, footer included.
+  SurfaceWriteOptions opt;
+  opt.volume_geometry = sample_geometry();
+  write_surface(dir + "/ours.white", octahedron(), opt);
+  const std::vector<double> out = python_numbers(run_python(dir, R"(
+v, f, meta = nib.freesurfer.read_geometry(')" + dir + R"(/ours.white', read_metadata=True)
+print('OUT:', v.shape[0], f.shape[0], v[4,2], f[7,2], *meta['cras'], *meta['volume'])
+)"));
+  ASSERT_EQ(out.size(), 10u);
+  EXPECT_EQ(out[0], 6);
+  EXPECT_EQ(out[1], 8);
+  EXPECT_DOUBLE_EQ(out[2], 13.125);
+  EXPECT_EQ(out[3], 5);
+  EXPECT_DOUBLE_EQ(out[4], 5.25);
+  EXPECT_DOUBLE_EQ(out[5], -18.5);
+  EXPECT_DOUBLE_EQ(out[6], 22.125);
+  EXPECT_EQ(out[7], 256);
+}
+
+TEST(FreeSurferCurv, RoundTripAndNibabel) {
+  const std::string dir = temp_dir("fs_curv");
+  MatrixXd values(5, 1);
+  values << -1.5, 0.0, 2.25, 3.125e-3, 100.0;
+  write_per_vertex(dir + "/lh.thickness", values);
+  const VectorXd back = read_per_vertex(dir + "/lh.thickness", 5);
+  EXPECT_TRUE(back.isApprox(values.col(0), 1e-7));
+  AUTHALIC_REQUIRE_NIBABEL();
+  const std::vector<double> nib_values = python_numbers(run_python(dir, R"(
+print('OUT:', *nib.freesurfer.read_morph_data(')" + dir + R"(/lh.thickness'))
+nib.freesurfer.write_morph_data(')" + dir + R"(/lh.nib', np.array([4.5, -3.25, 0.5], dtype=np.float32))
+)"));
+  ASSERT_EQ(nib_values.size(), 5u);
+  for (int i = 0; i < 5; ++i) EXPECT_NEAR(nib_values[i], values(i, 0), 1e-6 * (1 + std::abs(values(i, 0))));
+  const VectorXd from_nib = read_per_vertex(dir + "/lh.nib");
+  ASSERT_EQ(from_nib.size(), 3);
+  EXPECT_DOUBLE_EQ(from_nib[1], -3.25);
+}
+
+TEST(FreeSurferCurv, OldFormatIsRead) {
+  // Old curv: 3-byte vertex and face counts, then int16 hundredths.
+  const std::string dir = temp_dir("fs_curv_old");
+  detail::BigEndianWriter w;
+  w.u24(3);
+  w.u24(2);
+  w.i16(150);
+  w.i16(-25);
+  w.i16(0);
+  write_bytes(dir + "/lh.curv", w.out);
+  const VectorXd v = read_per_vertex(dir + "/lh.curv", 3);
+  EXPECT_DOUBLE_EQ(v[0], 1.5);
+  EXPECT_DOUBLE_EQ(v[1], -0.25);
+}
+
+TEST(TextPerVertex, RoundTrip) {
+  const std::string dir = temp_dir("text_per_vertex");
+  MatrixXd values(3, 1);
+  values << 0.125, -7.5, 1e6;
+  write_per_vertex(dir + "/values.txt", values);
+  EXPECT_TRUE(read_per_vertex(dir + "/values.txt", 3).isApprox(values.col(0)));
+}
+
+TEST(FreeSurferLabel, RoundTripAndRegion) {
+  const std::string dir = temp_dir("fs_label");
+  Label l;
+  l.vertices = {4, 0, 2};
+  l.positions.resize(3, 3);
+  l.positions << 1.5, 2.5, 3.5, -1, -2, -3, 0.125, 0.25, 0.5;
+  l.values.resize(3);
+  l.values << 0.5, 1, 0;
+  write_freesurfer_label(dir + "/lh.cortex.label", l);
+  const Label back = read_freesurfer_label(dir + "/lh.cortex.label");
+  EXPECT_EQ(back.vertices, l.vertices);
+  EXPECT_TRUE(back.positions.isApprox(l.positions, 1e-6));
+  EXPECT_TRUE(back.values.isApprox(l.values));
+  EXPECT_EQ(read_region_vertices(dir + "/lh.cortex.label", 6), (std::vector<int>{0, 2, 4}));
+  expect_input_error([&] { read_region_vertices(dir + "/lh.cortex.label", 4); }, dir + "/lh.cortex.label", "outside");
+  AUTHALIC_REQUIRE_NIBABEL();
+  const std::vector<double> nib_vertices =
+      python_numbers(run_python(dir, "print('OUT:', *nib.freesurfer.read_label('" + dir + "/lh.cortex.label'))\n"));
+  EXPECT_EQ(nib_vertices, (std::vector<double>{4, 0, 2}));
+}
+
+TEST(FreeSurferPatch, RoundTripAndPatchMesh) {
+  const std::string dir = temp_dir("fs_patch");
+  const TriMesh parent = octahedron();
+  // Keep the upper four faces: vertices 0..4 (vertex 5 dropped).
+  const std::vector<int> kept = {0, 1, 2, 3, 4};
+  MatrixXd xy(5, 3);
+  xy << 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 0;
+  write_freesurfer_patch(dir + "/lh.cortex.patch.flat", kept, xy);
+  const Patch p = read_freesurfer_patch(dir + "/lh.cortex.patch.flat");
+  EXPECT_EQ(p.vertices, kept);
+  EXPECT_TRUE(p.positions.isApprox(xy));
+  const TriMesh flat = patch_mesh(parent, p);
+  EXPECT_EQ(flat.num_faces(), 4);
+  EXPECT_EQ(flat.num_vertices(), 6);
+  EXPECT_TRUE(flat.V.row(2).isApprox(Eigen::RowVector3d(0, 1, 0)));
+  // A patch is not a surface: read_surface says what to do instead.
+  expect_input_error([&] { read_surface(dir + "/lh.cortex.patch.flat"); }, dir + "/lh.cortex.patch.flat", "patch");
+}
+
+TEST(FreeSurferPatch, BorderFlagAndOldFormat) {
+  const std::string dir = temp_dir("fs_patch_old");
+  detail::BigEndianWriter w;  // old format: count, then int index + 3 int16 hundredths
+  w.i32(2);
+  w.i32(8);    // vertex 7, interior
+  w.i16(150);
+  w.i16(-50);
+  w.i16(0);
+  w.i32(-3);   // vertex 2, border
+  w.i16(1);
+  w.i16(2);
+  w.i16(3);
+  write_bytes(dir + "/old.patch", w.out);
+  const Patch p = read_freesurfer_patch(dir + "/old.patch");
+  EXPECT_EQ(p.vertices, (std::vector<int>{7, 2}));
+  EXPECT_EQ(p.on_border, (std::vector<bool>{false, true}));
+  EXPECT_DOUBLE_EQ(p.positions(0, 0), 1.5);
+  EXPECT_DOUBLE_EQ(p.positions(1, 2), 0.03);
+}
