@@ -10,6 +10,7 @@
 #include "analysis/report.h"
 #include "app/command.h"
 #include "core/error.h"
+#include "core/sulcal_depth.h"
 #include "io/image_io.h"
 #include "io/surface_io.h"
 
@@ -21,6 +22,7 @@ struct RenderArgs {
   std::vector<std::string> maps;
   std::vector<std::string> captions;
   std::string values;
+  std::string sulcal_depth_surface;
   std::string colormap = "gray_r";
   std::vector<double> range;
   std::string label;
@@ -39,6 +41,9 @@ void setup(CLI::App& parent) {
   sub->add_option("OUT", a->out, "Output PNG")->required();
   sub->add_option("MAP", a->maps, "Flat map surface(s) (GIFTI, FreeSurfer, ...): x,y in the domain")->required();
   sub->add_option("--values", a->values, "Per-vertex values (GIFTI func/shape, FreeSurfer curv/sulc) for the colours");
+  sub->add_option("--sulcal-depth", a->sulcal_depth_surface,
+                  "Colour by a sulcal-depth proxy (mm) of this 3D surface (same vertices as the maps; extra map vertices, "
+                  "e.g. inserted by the flattening, take their neighbours' colour)");
   sub->add_option("--colormap", a->colormap, "gray, viridis, coolwarm, hot (append _r to reverse)")->capture_default_str();
   sub->add_option("--range", a->range, "Colour range: LO HI (default: 2nd-98th percentile)")->expected(2);
   sub->add_option("--label", a->label, "Colour-bar label with units, e.g. 'sulc (mm)'");
@@ -52,13 +57,31 @@ void setup(CLI::App& parent) {
   add_common_options(*sub);
   sub->callback([a]() {
     analysis::colormap(a->colormap, 0.0);  // an unknown name is an input error before any work
+    if (!a->values.empty() && !a->sulcal_depth_surface.empty()) {
+      throw InputError("render: give --values or --sulcal-depth, not both");
+    }
+    VectorXd depth;
+    if (!a->sulcal_depth_surface.empty()) {
+      const io::Surface s = io::read_surface(a->sulcal_depth_surface);
+      depth = sulcal_depth_proxy(s.mesh.V, s.mesh.F);
+    }
     std::vector<io::RgbImage> pictures;
     for (const auto& path : a->maps) {
       const io::Surface map = io::read_surface(path);
       if (map.mesh.num_faces() == 0) throw InputError(path + ": the map has no triangles; give a flat surface");
       analysis::ScalarColouring c;
-      if (!a->values.empty()) {
-        c.values = io::read_per_vertex(a->values, map.mesh.num_vertices());
+      if (!a->values.empty() || depth.size() > 0) {
+        if (depth.size() > 0) {
+          if (depth.size() > map.mesh.num_vertices()) {
+            throw InputError(a->sulcal_depth_surface + ": " + std::to_string(depth.size()) + " vertices but the map " + path +
+                             " has " + std::to_string(map.mesh.num_vertices()) + "; give the map's own surface");
+          }
+          c.values = VectorXd::Constant(map.mesh.num_vertices(), std::nan(""));
+          c.values.head(depth.size()) = depth;
+          if (a->label.empty()) a->label = "sulcal depth (mm)";
+        } else {
+          c.values = io::read_per_vertex(a->values, map.mesh.num_vertices());
+        }
         c.colormap = a->colormap;
         c.label = a->label;
         if (a->range.size() == 2) {
@@ -74,7 +97,7 @@ void setup(CLI::App& parent) {
       o.grid_cols = a->domain == "rectangle" ? 2 * a->grid : a->grid;
       o.grid_rows = a->grid;
       o.title = a->title;
-      o.draw_colour_bar = !a->values.empty();
+      o.draw_colour_bar = c.values.size() > 0;
       pictures.push_back(analysis::render_flat(map.mesh.V, map.mesh.F, c, o));
     }
     const io::RgbImage out = pictures.size() == 1 && a->captions.empty()

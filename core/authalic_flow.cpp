@@ -215,13 +215,32 @@ VectorXd vertex_share(const VectorXd& face_measure, const MatrixXi& F, int nv) {
 // Solves the Neumann problem K g = b (K = stiffness, Σ b = 0) with a tiny mass shift for
 // definiteness. Deterministic (serial Cholesky).
 VectorXd solve_neumann(const SparseMatrix& K, const VectorXd& b, const VectorXd& mass) {
-  SparseMatrix A = K;
+  // Only vertices with area take part (the others are not in the mesh).
+  const Eigen::Index n = K.rows();
+  std::vector<int> idx(n, -1);
+  int m = 0;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (mass[i] > 0) idx[i] = m++;
   const double eps = 1e-9 * (K.diagonal().cwiseAbs().maxCoeff() + 1e-300) / (mass.maxCoeff() + 1e-300);
-  const double mean_mass = mass.mean() > 0 ? mass.mean() : 1.0;
-  for (Eigen::Index i = 0; i < A.rows(); ++i) A.coeffRef(i, i) += eps * (mass[i] > 0 ? mass[i] : mean_mass);
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(K.nonZeros() + m);
+  for (int col = 0; col < K.outerSize(); ++col)
+    for (SparseMatrix::InnerIterator it(K, col); it; ++it)
+      if (idx[it.row()] >= 0 && idx[it.col()] >= 0) t.emplace_back(idx[it.row()], idx[it.col()], it.value());
+  VectorXd bb(m);
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (idx[i] >= 0) {
+      t.emplace_back(idx[i], idx[i], eps * mass[i]);
+      bb[idx[i]] = b[i];
+    }
+  SparseMatrix A(m, m);
+  A.setFromTriplets(t.begin(), t.end());
   Eigen::SimplicialLDLT<SparseMatrix> solver(A);
-  if (solver.info() != Eigen::Success) return VectorXd::Zero(b.size());
-  VectorXd g = solver.solve(b);
+  VectorXd g = VectorXd::Zero(n);
+  if (solver.info() != Eigen::Success) return g;
+  const VectorXd x = solver.solve(bb);
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (idx[i] >= 0) g[i] = x[idx[i]];
   return g;
 }
 

@@ -9,6 +9,10 @@ PACKAGES=(
   libnifti2-dev libgiftiio-dev zlib1g-dev libpng-dev libssl-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev
   python3 python3-nibabel python3-numpy python3-scipy
+  clang libclang-rt-14-dev libomp-dev      # libFuzzer targets (scripts/fuzz.sh), ThreadSanitizer
+  connectome-workbench                     # wb_command: reference values for the sampling tests
+  chromium                                 # headless screenshot of the HTML report (test)
+  snakemake                                # workflow/Snakefile (cohorts beyond one machine; tested)
 )
 export DEBIAN_FRONTEND=noninteractive
 missing=()

@@ -1,0 +1,90 @@
+// Output safety of `authalic run` (issue 8): killed with SIGKILL at several moments, it never leaves
+// a subject folder that looks complete but is not; a rerun then completes. Also: it refuses to
+// overwrite without --force, and bad input writes nothing.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <thread>
+
+#include "common/test_data.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<std::string> run_args(const std::string& out) {
+  const std::string s = std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/";
+  return {authalic::test::authalic_binary(), "run", "--id", "patient01",
+          "--lh-white", s + "surf/lh.white", "--lh-pial", s + "surf/lh.pial",
+          "--rh-white", s + "surf/rh.white", "--rh-pial", s + "surf/rh.pial",
+          "--lh-cortex", s + "label/lh.cortex.label", "--rh-cortex", s + "label/rh.cortex.label",
+          "--pet", s + "sub-patient01/sub-patient01_pet.nii.gz", "--out", out, "--force", "--quiet"};
+}
+
+pid_t start(const std::vector<std::string>& args) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    freopen("/dev/null", "w", stderr);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+// A finished subject folder has its log (written last, just before the rename).
+bool looks_complete(const fs::path& dir) { return fs::exists(dir / "log.txt") && fs::exists(dir / "report.html"); }
+
+}  // namespace
+
+TEST(RunSafety, SigkillNeverLeavesAHalfWrittenSubjectFolder) {
+  const std::string out = authalic::test::temp_dir("run-kill");
+  const fs::path subject = fs::path(out) / "sub-patient01";
+  for (int delay_ms : {50, 300, 900, 1800, 2600}) {
+    const pid_t pid = start(run_args(out));
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+    kill(pid, SIGKILL);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    // Either no folder, or a complete one (the run finished before the kill).
+    if (fs::exists(subject)) {
+      EXPECT_TRUE(looks_complete(subject)) << "killed after " << delay_ms << " ms";
+    }
+  }
+  // A rerun completes and replaces whatever was there.
+  const pid_t pid = start(run_args(out));
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_TRUE(looks_complete(subject));
+}
+
+TEST(RunSafety, RefusesToOverwriteWithoutForceAndBadInputWritesNothing) {
+  const std::string out = authalic::test::temp_dir("run-refuse");
+  fs::create_directories(fs::path(out) / "sub-patient01");
+  auto args = run_args(out);
+  args.pop_back();  // --quiet
+  args.pop_back();  // --force
+  std::string cmd;
+  for (const auto& a : args) cmd += "'" + a + "' ";
+  std::string log;
+  EXPECT_EQ(authalic::test::run_command(cmd, &log), 2);
+  EXPECT_NE(log.find("--force"), std::string::npos) << log;
+
+  const std::string out2 = authalic::test::temp_dir("run-bad");
+  auto bad = run_args(out2);
+  for (std::size_t i = 0; i + 1 < bad.size(); ++i)
+    if (bad[i] == "--pet") bad[i + 1] = out2 + "/missing.nii.gz";
+  cmd.clear();
+  for (const auto& a : bad) cmd += "'" + a + "' ";
+  EXPECT_EQ(authalic::test::run_command(cmd, &log), 2);
+  EXPECT_NE(log.find("missing.nii.gz"), std::string::npos) << log;
+  EXPECT_EQ(std::distance(fs::directory_iterator(out2), fs::directory_iterator()), 0) << "nothing may be written";
+}
