@@ -2,6 +2,7 @@
 #include "analysis/elements.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -38,58 +39,95 @@ std::string fmt(double x, int precision = 4) {
 using EdgeKey = std::pair<int, int>;
 EdgeKey edge_key(int a, int b) { return a < b ? EdgeKey{a, b} : EdgeKey{b, a}; }
 
-// Traces each vertex the flattening appended (index >= nv) to the surface edge it splits.
-// Candidates: pairs of its neighbours that are an edge of the surface (or of an earlier inserted
-// vertex's parents) and no longer an edge of the map.
+// Traces each vertex the flattening appended (index >= nv) to the surface edge it splits, replaying
+// the splits on the surface's own triangles: vertex w split the current half-edge a->b when a-b is
+// no edge of the map and the map has the half-edges a->w and w->b (the two pieces of the face that held a->b keep its
+// orientation). Splits are replayed in index order, so a vertex may split an edge made by an
+// earlier one (e.g. an ear split next to a corner split).
 void trace_inserted_vertices(ElementMap& m, const MatrixXi& F_surface, const std::string& map_name) {
   const int nv = m.num_surface_vertices;
   const int nm = static_cast<int>(m.D.rows());
   if (nm == nv) return;
-  std::set<EdgeKey> surface_edges, map_edges;
-  std::map<EdgeKey, int> map_edge_faces;
+  std::map<EdgeKey, int> current;  // directed half-edge (a, b) -> the third vertex of its face
   for (int f = 0; f < F_surface.rows(); ++f)
-    for (int c = 0; c < 3; ++c) surface_edges.insert(edge_key(F_surface(f, c), F_surface(f, (c + 1) % 3)));
+    for (int c = 0; c < 3; ++c) current[{F_surface(f, c), F_surface(f, (c + 1) % 3)}] = F_surface(f, (c + 2) % 3);
+  std::set<EdgeKey> map_half_edges;
   std::vector<std::set<int>> ring(static_cast<std::size_t>(nm));
   for (int f = 0; f < m.F.rows(); ++f)
     for (int c = 0; c < 3; ++c) {
       const int a = m.F(f, c), b = m.F(f, (c + 1) % 3);
-      map_edges.insert(edge_key(a, b));
-      ++map_edge_faces[edge_key(a, b)];
+      map_half_edges.insert({a, b});
       ring[static_cast<std::size_t>(a)].insert(b);
       ring[static_cast<std::size_t>(b)].insert(a);
     }
-  // Edges that existed before the splits: the surface's, plus those an inserted corner vertex made.
-  std::set<EdgeKey> known = surface_edges;
+  // Map faces as rotation-normalised triples, to recognise the pieces of a split face.
+  auto face_key = [](int a, int b, int c) {
+    if (b < a && b < c) return std::array<int, 3>{b, c, a};
+    if (c < a && c < b) return std::array<int, 3>{c, a, b};
+    return std::array<int, 3>{a, b, c};
+  };
+  std::set<std::array<int, 3>> map_faces;
+  for (int f = 0; f < m.F.rows(); ++f) map_faces.insert(face_key(m.F(f, 0), m.F(f, 1), m.F(f, 2)));
+  // The flattening splits only edges whose two endpoints lie on the boundary (corner splits of
+  // boundary edges, ear splits of dividing edges), so both ends of a split edge are boundary
+  // vertices of the map.
+  std::vector<bool> on_boundary(static_cast<std::size_t>(nm), false);
+  for (const EdgeKey& h : map_half_edges)
+    if (!map_half_edges.count({h.second, h.first})) on_boundary[static_cast<std::size_t>(h.first)] = on_boundary[static_cast<std::size_t>(h.second)] = true;
   for (int w = nv; w < nm; ++w) {
     const auto& r = ring[static_cast<std::size_t>(w)];
-    std::vector<int> nb(r.begin(), r.end());
-    std::vector<EdgeKey> candidates;
-    for (std::size_t i = 0; i < nb.size(); ++i)
-      for (std::size_t j = i + 1; j < nb.size(); ++j) {
-        const int p = nb[i], q = nb[j];
-        if (p >= w || q >= w) continue;
-        const EdgeKey e = edge_key(p, q);
-        if (known.count(e) && !map_edges.count(e)) candidates.push_back(e);
+    // Candidates (undirected, p < q) with their evidence: how many of the pieces (a, w, o) and
+    // (w, b, o) of the faces that held a->b are faces of the map (later splits may cut them).
+    std::vector<std::pair<EdgeKey, int>> candidates;
+    for (int a : r)
+      for (int b : r) {
+        if (a == b || !on_boundary[static_cast<std::size_t>(a)] || !on_boundary[static_cast<std::size_t>(b)]) continue;
+        const auto it = current.find({a, b});
+        if (it == current.end()) continue;
+        if (map_half_edges.count({a, b}) || map_half_edges.count({b, a})) continue;  // still an edge: not split
+        if (!map_half_edges.count({a, w}) || !map_half_edges.count({w, b})) continue;
+        const int o = it->second;
+        const int evidence = static_cast<int>(map_faces.count(face_key(a, w, o)) + map_faces.count(face_key(w, b, o)));
+        const EdgeKey e = edge_key(a, b);
+        auto c = std::find_if(candidates.begin(), candidates.end(), [&](const auto& x) { return x.first == e; });
+        if (c == candidates.end()) {
+          candidates.push_back({e, evidence});
+        } else {
+          c->second += evidence;
+        }
       }
+    // Keep the best-supported candidate(s).
+    int best = -1;
+    for (const auto& c : candidates) best = std::max(best, c.second);
+    candidates.erase(std::remove_if(candidates.begin(), candidates.end(), [&](const auto& c) { return c.second < best; }),
+                     candidates.end());
     if (candidates.size() != 1)
       throw InputError(map_name + ": map vertex " + std::to_string(w) + " (appended by the flattening) cannot be traced to " +
                        (candidates.empty() ? std::string("a") : std::string("a unique")) +
                        " surface edge it splits; give the map computed from this surface (its vertices first, in order)");
-    const int p = candidates[0].first, q = candidates[0].second;
-    bool on_boundary = false;
-    for (int x : r)
-      if (map_edge_faces[edge_key(w, x)] == 1) on_boundary = true;
+    const int p = candidates[0].first.first, q = candidates[0].first.second;
+    const bool boundary_edge = current.count({p, q}) + current.count({q, p}) == 1;
     double t = 0.5;  // ear split: the 3D midpoint (core/conformal_map.h)
-    if (on_boundary && m.D.cols() == 2) {
+    if (boundary_edge && m.D.cols() == 2) {
       // Corner split: placed by arc length along the boundary edge; read the fraction from the map.
       const double dp = (m.D.row(w) - m.D.row(p)).norm(), dq = (m.D.row(q) - m.D.row(w)).norm();
       if (dp + dq > 0) t = dp / (dp + dq);
     }
     m.V3.row(w) = (1 - t) * m.V3.row(p) + t * m.V3.row(q);
-    const double vp = m.values(p), vq = m.values(q);
-    m.values(w) = (1 - t) * vp + t * vq;
-    known.insert(edge_key(p, w));
-    known.insert(edge_key(w, q));
+    m.values(w) = (1 - t) * m.values(p) + t * m.values(q);
+    // Replay the split on the current triangles: face (a, b, o) -> (a, w, o) + (w, b, o).
+    for (const EdgeKey& ab : {EdgeKey{p, q}, EdgeKey{q, p}}) {
+      const auto it = current.find(ab);
+      if (it == current.end()) continue;
+      const int a = ab.first, b = ab.second, o = it->second;
+      current.erase(it);
+      current[{a, w}] = o;
+      current[{w, o}] = a;
+      current[{o, a}] = w;
+      current[{w, b}] = o;
+      current[{b, o}] = w;
+      current[{o, w}] = b;
+    }
   }
   m.inserted_vertices = nm - nv;
   m.notes.push_back(std::to_string(nm - nv) + " vertices appended by the flattening were traced to the surface edges they split");

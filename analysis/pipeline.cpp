@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -384,7 +385,9 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       rh.surface_V = h.pial.mesh.V;
       rh.surface_F = h.pial.mesh.F;
       rh.element_of_vertex = h.elements.vertex_element;
-      rh.pet = h.pet.head(h.white.mesh.num_vertices());
+      // Per map vertex: the surface's values, NaN for vertices the map inserted (drawn gray).
+      rh.pet = VectorXd::Constant(h.uv.rows(), std::numeric_limits<double>::quiet_NaN());
+      rh.pet.head(h.white.mesh.num_vertices()) = h.pet.head(h.white.mesh.num_vertices());
       rh.element_pet = block_values(h.elements.block);
       if (compare) rh.element_z.assign(cmp.z.begin() + b * table.grid.num_elements(), cmp.z.begin() + (b + 1) * table.grid.num_elements());
       rh.distortion = {{"flipped triangles", std::to_string(h.metrics.flips)},

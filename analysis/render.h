@@ -1,6 +1,8 @@
 #pragma once
 // Pictures without a display: flat maps, sphere and 3D surface views are rasterised in software
-// straight into an RgbImage (io::write_png writes it). No VTK rendering, no X server.
+// straight into an RgbImage (io::write_png writes it). No VTK rendering, no X server. Labels use
+// a built-in 5x7 bitmap font (analysis/font.cpp); the drawing order is fixed, so the same input
+// gives the same bytes.
 #include <array>
 #include <string>
 #include <vector>
@@ -12,8 +14,10 @@ namespace authalic::analysis {
 
 using Rgb = std::array<unsigned char, 3>;
 
-// Colour maps: "gray" (sulcal shading), "viridis" (sequential, PET), "coolwarm" (diverging, z),
-// "hot". t in [0,1].
+// Colour maps from their published control points, linear in between: "gray" (sulcal shading),
+// "viridis" (sequential, PET; van der Walt & Smith's matplotlib table, 17 of its 256 entries),
+// "coolwarm" (diverging, z; Moreland 2009, his 33-point table), "hot" (matplotlib/MATLAB
+// segments). A "_r" suffix reverses. t in [0,1] (clamped). Unknown name -> InputError.
 Rgb colormap(const std::string& name, double t);
 
 // Per-vertex scalar colouring with a range; values outside are clamped, NaN -> nan_colour.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <tuple>
 
@@ -48,8 +49,9 @@ void setup(CLI::App& parent) {
   sub->add_option("--range", a->range, "Colour range: LO HI (default: 2nd-98th percentile)")->expected(2);
   sub->add_option("--label", a->label, "Colour-bar label with units, e.g. 'sulc (mm)'");
   sub->add_option("--grid", a->grid, "Draw the K x K element grid (2K x K on the rectangle)")->check(CLI::Range(0, 512));
-  sub->add_option("--domain", a->domain, "square ([0,1]^2) or rectangle ([0,2] x [0,1])")
-      ->check(CLI::IsMember({"square", "rectangle"}))
+  sub->add_option("--domain", a->domain, "square ([0,1]^2), rectangle ([0,2] x [0,1]) or fit (the map's bounding box, "
+                                         "e.g. a flat surface in mm or a FreeSurfer flat patch)")
+      ->check(CLI::IsMember({"square", "rectangle", "fit"}))
       ->capture_default_str();
   sub->add_option("--caption", a->captions, "Caption under each map (repeat, in order)");
   sub->add_option("--title", a->title, "Title over each map");
@@ -94,6 +96,20 @@ void setup(CLI::App& parent) {
       analysis::FlatRenderOptions o;
       o.width = a->width;
       o.domain_width = a->domain == "rectangle" ? 2.0 : 1.0;
+      if (a->domain == "fit") {
+        Eigen::Vector2d lo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()), hi = -lo;
+        for (int f = 0; f < map.mesh.num_faces(); ++f) {
+          for (int k = 0; k < 3; ++k) {
+            const Eigen::Vector2d p = map.mesh.V.row(map.mesh.F(f, k)).head<2>().transpose();
+            lo = lo.cwiseMin(p);
+            hi = hi.cwiseMax(p);
+          }
+        }
+        o.x0 = lo.x();
+        o.y0 = lo.y();
+        o.domain_width = std::max(hi.x() - lo.x(), 1e-9);
+        o.domain_height = std::max(hi.y() - lo.y(), 1e-9);
+      }
       o.grid_cols = a->domain == "rectangle" ? 2 * a->grid : a->grid;
       o.grid_rows = a->grid;
       o.title = a->title;

@@ -114,7 +114,9 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
   grid.rows = ny;
   grid.width = width;
   grid.height = 1.0;
+  ScopeTimer* t1 = new ScopeTimer("  raster");
   const VectorXd cells = rasterize_face_measure(UV, F, face_target, grid);
+  delete t1;
   MatrixXd rho(ny, nx);
   for (int r = 0; r < ny; ++r)
     for (int c = 0; c < nx; ++c) rho(r, c) = cells[r * nx + c] / (hx * hy);
@@ -122,12 +124,15 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
   const double mean = rho.mean();
   if (mean > 0) rho /= mean;
 
+  ScopeTimer* t2 = new ScopeTimer("  solve");
   NeumannPoissonGrid solver(nx, ny, hx, hy);
   MatrixXd rho_s, g;
   solver.smooth_and_solve(rho, smoothing_cells * std::max(hx, hy), &rho_s, &g);
   rho_s = rho_s.cwiseMax(1e-3);  // the smoothed density of a covering map is positive; guard anyway
   MatrixXd gx, gy;
   staggered_gradient(g, hx, hy, &gx, &gy);
+  delete t2;
+  ScopeTimer t3("  rk4");
   const Bilinear vx{&gx, 0.0, hx, 0.5 * hy, hy};
   const Bilinear vy{&gy, 0.5 * hx, hx, 0.0, hy};
   const Bilinear dens{&rho_s, 0.5 * hx, hx, 0.5 * hy, hy};
@@ -296,12 +301,14 @@ double adaptive_step(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, d
 // at 1); triangles that would still flip (their vertices' steps differ) halve the steps of their
 // vertices until none flips. A single bad triangle then slows only its own vertices, not the mesh
 // (the stall measured with one global step, issue 3), and no triangle can flip.
+// theta <= 0: no critical-step limit, only the end state is checked (for the grid pass, whose
+// vertices travel on curved paths, so the straight-path critical steps do not apply).
 MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta,
                               const VectorXi& side_mask, double w, double min_area, VectorXd* steps_out = nullptr) {
   const Eigen::Index nv = UV.rows(), nf = F.rows();
   VectorXd crit = VectorXd::Constant(nf, kInf);
 #pragma omp parallel for schedule(static)
-  for (Eigen::Index f = 0; f < nf; ++f) {
+  for (Eigen::Index f = 0; f < (theta > 0 ? nf : 0); ++f) {
     Eigen::Vector2d p[3], d[3];
     for (int c = 0; c < 3; ++c) {
       p[c] = UV.row(F(f, c)).head<2>().transpose();
@@ -311,7 +318,7 @@ MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const Matri
   }
   VectorXd lam = VectorXd::Ones(nv);
   for (Eigen::Index f = 0; f < nf; ++f)
-    for (int c = 0; c < 3; ++c) lam[F(f, c)] = std::min(lam[F(f, c)], theta * crit[f]);
+    for (int c = 0; c < 3; ++c) lam[F(f, c)] = std::min(lam[F(f, c)], theta > 0 ? theta * crit[f] : 1.0);
   MatrixXd out = UV;
   auto place = [&](Eigen::Index v) {
     double x = UV(v, 0) + lam[v] * D(v, 0), y = UV(v, 1) + lam[v] * D(v, 1);
@@ -336,6 +343,79 @@ MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const Matri
   }
   if (steps_out) *steps_out = lam;
   return out;
+}
+
+// Gauss-Newton step on the per-vertex areas (the polish): with A_v the barycentric domain area of
+// vertex v and T_v its target, find the smallest displacement δ of the free vertices with
+// J δ = −(A − T)/T to first order, J = ∂(A/T)/∂p (each triangle's area is linear in each of its
+// vertices: ∂a/∂p_i = ½ (y_j − y_k, x_k − x_j) for the counter-clockwise triangle (i, j, k)).
+// δ = Jᵀ y with (J Jᵀ + μ I) y = −r (Levenberg-Marquardt, minimal-norm solution). Unlike the
+// cotangent Poisson step with averaged vertex gradients, J Jᵀ is the consistent "divergence of
+// gradient" of this discretisation, so a full step removes the local (sub-grid) errors the grid
+// flow cannot see. Only vertices in `free_vertex` move; boundary vertices only along their side.
+MatrixXd area_newton_displacement(const MatrixXd& UV, const MatrixXi& F, const VectorXd& vertex_target,
+                                  const VectorXi& side_mask, const std::vector<char>& free_vertex) {
+  const int nv = static_cast<int>(UV.rows());
+  // Unknown numbering: 2 per free vertex, minus the coordinates its side fixes.
+  std::vector<int> col(2 * nv, -1);
+  int ncols = 0;
+  for (int v = 0; v < nv; ++v) {
+    if (!free_vertex[v]) continue;
+    const int m = side_mask.size() ? side_mask[v] : 0;
+    if (!(m & (kSideLeft | kSideRight))) col[2 * v] = ncols++;
+    if (!(m & (kSideBottom | kSideTop))) col[2 * v + 1] = ncols++;
+  }
+  // Rows: vertices whose area depends on a free vertex.
+  std::vector<int> row(nv, -1);
+  int nrows = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    bool touches = false;
+    for (int c = 0; c < 3; ++c) touches = touches || free_vertex[F(f, c)];
+    if (!touches) continue;
+    for (int c = 0; c < 3; ++c)
+      if (row[F(f, c)] < 0) row[F(f, c)] = nrows++;
+  }
+  MatrixXd D = MatrixXd::Zero(nv, 2);
+  if (ncols == 0 || nrows == 0) return D;
+  const VectorXd a = signed_face_areas_2d(UV, F);
+  VectorXd area = VectorXd::Zero(nv);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) area[F(f, c)] += a[f] / 3.0;
+  std::vector<Eigen::Triplet<double>> t;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    bool touches = false;
+    for (int c = 0; c < 3; ++c) touches = touches || free_vertex[F(f, c)];
+    if (!touches) continue;
+    for (int c = 0; c < 3; ++c) {
+      const int i = F(f, c), j = F(f, (c + 1) % 3), k = F(f, (c + 2) % 3);
+      const double gx = 0.5 * (UV(j, 1) - UV(k, 1)), gy = 0.5 * (UV(k, 0) - UV(j, 0));
+      for (int r = 0; r < 3; ++r) {
+        const int v = F(f, r);
+        const double s = 1.0 / (3.0 * vertex_target[v]);
+        if (col[2 * i] >= 0) t.emplace_back(row[v], col[2 * i], s * gx);
+        if (col[2 * i + 1] >= 0) t.emplace_back(row[v], col[2 * i + 1], s * gy);
+      }
+    }
+  }
+  SparseMatrix J(nrows, ncols);
+  J.setFromTriplets(t.begin(), t.end());
+  VectorXd r(nrows);
+  for (int v = 0; v < nv; ++v)
+    if (row[v] >= 0) r[row[v]] = area[v] / vertex_target[v] - 1.0;
+  SparseMatrix N = J * SparseMatrix(J.transpose());
+  const double mu = 1e-6 * N.diagonal().mean();
+  SparseMatrix I(nrows, nrows);
+  I.setIdentity();
+  N += mu * I;
+  Eigen::SimplicialLDLT<SparseMatrix> solver(N);
+  if (solver.info() != Eigen::Success) return D;
+  const VectorXd y = solver.solve(-r);
+  const VectorXd delta = J.transpose() * y;
+  for (int v = 0; v < nv; ++v) {
+    if (col[2 * v] >= 0) D(v, 0) = delta[col[2 * v]];
+    if (col[2 * v + 1] >= 0) D(v, 1) = delta[col[2 * v + 1]];
+  }
+  return D;
 }
 
 void apply_displacement(MatrixXd& UV, const MatrixXd& D, double lambda, const VectorXi& side_mask, double w) {
@@ -519,7 +599,11 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
         break;
       }
       ScopeTimer st("pass");
-      MatrixXd next = moser_grid_pass(target, UV, F, side_mask, w, opt.grid_resolution, opt.smoothing_cells, opt.rk4_steps);
+      MatrixXd moved = moser_grid_pass(target, UV, F, side_mask, w, opt.grid_resolution, opt.smoothing_cells, opt.rk4_steps);
+      // The flow is a diffeomorphism, its piecewise-linear image of a triangle not quite: take the
+      // pass's displacement with per-vertex flip-preventing steps (a vertex whose triangle would
+      // flip stops short), so no pass can leave a flipped triangle.
+      MatrixXd next = local_step_positions(UV, F, moved - UV, 0.0, side_mask, w, min_area);
       const Stats s = vertex_stats(vertex_log_ratio(target, next, F, nv));
       ++rep.iterations;
       rep.history_mean.push_back(s.mean);
@@ -576,20 +660,47 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
   { ScopeTimer st("repair"); rep.repaired = repair_flips(V, F, side_mask, w, UV, &remaining); }
   if (rep.repaired > 0) cur = stats_of(UV);
 
-  // Polish: mesh Lie steps on the output connectivity with per-vertex flip-preventing steps,
-  // kept while they lower the per-vertex error.
+  // Polish: Gauss-Newton steps on the per-vertex areas (area_newton_displacement) around the
+  // vertices whose |ln ratio| exceeds the band, with per-vertex flip-preventing steps. Only the
+  // excess over the band is corrected, so vertices already within it (and the per-face
+  // distortion) are disturbed as little as possible.
   if (opt.polish && opt.method == FlowMethod::Grid && remaining == 0) {
-    for (int k = 0; k < opt.polish_iterations && !met(cur); ++k) {
+    std::vector<std::vector<int>> ring(nv);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) ring[F(f, c)].push_back(F(f, (c + 1) % 3));
+    for (int k = 0; k < opt.polish_iterations; ++k) {
       ScopeTimer st("polish it");
-      const MatrixXd D = lie_displacement(UV, F, vertex_target, 1.0, side_mask);
+      const VectorXd e = vertex_log_ratio(target, UV, F, nv);  // ln(target / domain)
+      const VectorXd dom = vertex_share(signed_face_areas_2d(UV, F).cwiseAbs(), F, nv);
+      std::vector<char> free_vertex(nv, 0);
+      VectorXd goal = VectorXd::Ones(nv);
+      int bad = 0;
+      for (int v = 0; v < nv; ++v) {
+        if (!std::isfinite(e[v])) continue;
+        const double excess = e[v] - std::clamp(e[v], -opt.polish_band, opt.polish_band);
+        goal[v] = dom[v] * std::exp(excess);
+        if (excess != 0) free_vertex[v] = 1, ++bad;
+      }
+      if (bad == 0) break;
+      for (int grow = 0; grow < opt.polish_rings; ++grow) {
+        std::vector<char> next = free_vertex;
+        for (int v = 0; v < nv; ++v)
+          if (free_vertex[v])
+            for (int u : ring[v]) next[u] = 1;
+        free_vertex.swap(next);
+      }
+      for (int v = 0; v < nv; ++v)
+        if (side_mask.size() && __builtin_popcount(side_mask[v]) == 2) free_vertex[v] = 0;  // corners stay
+      const MatrixXd D = area_newton_displacement(UV, F, goal, side_mask, free_vertex);
       MatrixXd next = local_step_positions(UV, F, D, opt.theta, side_mask, w, min_area);
       const Stats s = stats_of(next);
-      if (!(s.mean < cur.mean) || !(s.p99 <= cur.p99 * 1.01)) break;
+      if (!(s.p99 < cur.p99 || s.max < cur.max) || s.mean > cur.mean * 1.05) break;
       UV = std::move(next);
       cur = s;
       ++rep.polish_iterations;
       std::ostringstream msg;
-      msg << "polish " << k + 1 << ": per-vertex mean |ln ratio| " << cur.mean << ", p99 " << cur.p99;
+      msg << "polish " << k + 1 << " (" << bad << " vertices outside the band): per-vertex mean |ln ratio| " << cur.mean
+          << ", p99 " << cur.p99 << ", max " << cur.max;
       report(progress, "flow", -1, msg.str());
     }
     if (met(cur)) rep.stop_reason = "tolerance";

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 
@@ -233,6 +234,23 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
   for (int i = 0; i < nb; ++i) total += (row3(V, loop[(i + 1) % nb]) - row3(V, loop[i])).norm();
   if (!(total > 0)) throw std::invalid_argument("conformal_rectangle_map: the boundary has zero length");
   s[0] = opt.anchor_position;
+  if (opt.use_anchor_point) {
+    // The point of the boundary polyline nearest to anchor_point goes to anchor_position: rotate
+    // the loop to start at its edge and shift the start by the point's offset along that edge.
+    // (A point, not a vertex: a refined mesh of the same surface gets the same parametrisation.)
+    int best = 0;
+    double best_d = std::numeric_limits<double>::infinity(), best_t = 0;
+    for (int i = 0; i < nb; ++i) {
+      const Eigen::Vector3d a = row3(V, loop[i]), b = row3(V, loop[(i + 1) % nb]);
+      const Eigen::Vector3d e = b - a;
+      const double l2 = e.squaredNorm();
+      const double t = l2 > 0 ? std::clamp((opt.anchor_point - a).dot(e) / l2, 0.0, 1.0) : 0.0;
+      const double d = (a + t * e - opt.anchor_point).squaredNorm();
+      if (d < best_d) best_d = d, best = i, best_t = t;
+    }
+    std::rotate(loop.begin(), loop.begin() + best, loop.end());
+    s[0] = opt.anchor_position - P * best_t * (row3(V, loop[1]) - row3(V, loop[0])).norm() / total;
+  }
   for (int i = 0; i < nb; ++i) s[i + 1] = s[i] + P * (row3(V, loop[(i + 1) % nb]) - row3(V, loop[i])).norm() / total;
   s[nb] = s[0] + P;  // exact closure
 
@@ -264,6 +282,8 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
 
   // Output vertices: the input's, then inserted corner vertices, then ear-split midpoints.
   std::vector<Eigen::Vector3d> extra;
+  std::vector<std::array<int, 2>> parents;  // inserted vertex = (1 − w) parent0 + w parent1
+  std::vector<double> parent_weight;
   std::vector<Eigen::Vector2d> extra_uv;
   std::vector<int> extra_side;
   std::vector<double> vertex_s(nv, 0.0);
@@ -309,6 +329,8 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
     for (const auto& [cu, c] : inserted[i]) {
       const double t = (cu - s[i]) / (s[i + 1] - s[i]);
       extra.push_back((1 - t) * row3(V, a) + t * row3(V, b));
+      parents.push_back({a, b});
+      parent_weight.push_back(t);
       extra_uv.push_back(rectangle_perimeter_point(corners[c], w));
       extra_side.push_back(kCornerSides[c]);
       const int id = nv + static_cast<int>(extra.size()) - 1;
@@ -352,6 +374,8 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
     if (topo1.edge_faces[e].size() == 2 && (mask[a] & mask[b]) != 0) {
       mid[e] = static_cast<int>(all_pos.size());
       all_pos.push_back(0.5 * (all_pos[a] + all_pos[b]));
+      parents.push_back({a, b});
+      parent_weight.push_back(0.5);
       ++R.edges_split;
     }
   }
@@ -407,6 +431,12 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
   for (size_t f = 0; f < out_faces.size(); ++f) {
     R.F.row(f) << out_faces[f][0], out_faces[f][1], out_faces[f][2];
     R.face_origin[f] = out_origin[f];
+  }
+  R.inserted_parents.resize(static_cast<Eigen::Index>(parents.size()), 2);
+  R.inserted_weight.resize(static_cast<Eigen::Index>(parents.size()));
+  for (size_t k = 0; k < parents.size(); ++k) {
+    R.inserted_parents.row(k) << parents[k][0], parents[k][1];
+    R.inserted_weight[k] = parent_weight[k];
   }
   R.side_mask = VectorXi::Zero(ntot);
   for (int v = 0; v < n1; ++v) R.side_mask[v] = mask[v];

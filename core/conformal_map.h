@@ -46,6 +46,10 @@ struct RectangleBoundaryMap {
   double width = 1.0;        // W: the rectangle is [0, W] x [0, 1]
   int anchor_vertex = -1;    // boundary vertex (input index) placed at anchor_position; -1 = any
   double anchor_position = 0.0;  // perimeter coordinate of the anchor
+  // Alternatively (when use_anchor_point): the point of the boundary polyline nearest to this 3D
+  // point goes to anchor_position (overrides anchor_vertex).
+  bool use_anchor_point = false;
+  Eigen::Vector3d anchor_point = Eigen::Vector3d::Zero();
   // A boundary vertex closer to a corner than this fraction of its shorter incident boundary
   // edge is moved onto the corner instead of inserting a near-duplicate vertex there.
   double corner_snap = 0.05;
@@ -60,6 +64,11 @@ struct ConformalMapResult {
   MatrixXi F;   // #F' x 3: the input faces, split ones replaced by their pieces
   MatrixXd UV;  // #V' x 2 in [0, W] x [0, 1]; vertices used by no face get (0, 0)
   VectorXi face_origin;     // #F': the input face each face is (a piece of)
+  // Inserted vertex k (index num_input_vertices + k) lies at (1 − w_k) p0 + w_k p1 on the surface,
+  // p0, p1 the rows of inserted_parents (indices into V, possibly earlier inserted vertices):
+  // interpolate per-vertex data the same way, in order.
+  MatrixXi inserted_parents;
+  VectorXd inserted_weight;
   std::vector<int> boundary;  // boundary loop of F' (counter-clockwise on the rectangle)
   VectorXi side_mask;       // #V': RectangleSide bits of boundary vertices, 0 elsewhere
   int num_input_vertices = 0;

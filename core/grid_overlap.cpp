@@ -12,7 +12,28 @@ namespace {
 struct Pt {
   double x, y;
 };
-using Poly = std::vector<Pt>;
+// A small convex polygon: a triangle clipped by at most 4 axis-parallel half-planes has at most 7
+// vertices; the pole polygons of the sphere grid have at most 10 before clipping, 14 after.
+struct Poly {
+  Pt p[16];
+  int n = 0;
+  Poly() = default;
+  Poly(std::initializer_list<Pt> pts) {
+    for (const Pt& q : pts) p[n++] = q;
+  }
+  size_t size() const { return static_cast<size_t>(n); }
+  bool empty() const { return n == 0; }
+  void clear() { n = 0; }
+  void push_back(const Pt& q) {
+    if (n < 16) p[n++] = q;
+  }
+  Pt& operator[](size_t i) { return p[i]; }
+  const Pt& operator[](size_t i) const { return p[i]; }
+  const Pt* begin() const { return p; }
+  const Pt* end() const { return p + n; }
+  Pt* begin() { return p; }
+  Pt* end() { return p + n; }
+};
 
 // Keeps the part of `in` with sign * (coordinate - bound) >= 0 (Sutherland-Hodgman, one edge).
 void clip_halfplane(const Poly& in, bool along_x, double bound, double sign, Poly& out) {
@@ -92,32 +113,42 @@ void clip_into_cells(const Poly& poly, double x0, double cw, int col_lo_limit, i
   const int r0 = std::max(0, static_cast<int>(std::floor((ymin - y0) / rh)));
   const int r1 = std::min(rows - 1, static_cast<int>(std::floor((ymax - y0) / rh)));
   if (c0 > c1 || r0 > r1) return;
-  Poly rest = poly, strip, tmp, piece, tmp2;
+  if (c0 == c1 && r0 == r1) {
+    // Inside one cell (unless it pokes out of the grid): no clipping needed.
+    const bool inside = xmin >= x0 + c0 * cw && xmax <= x0 + (c0 + 1) * cw && ymin >= y0 + r0 * rh &&
+                        ymax <= y0 + (r0 + 1) * rh;
+    if (inside) {
+      emit(c0, r0, poly);
+      return;
+    }
+  }
+  // Ping-pong buffers: `rest` is what lies right of the current column, `srest` what lies above
+  // the current row within the column's strip.
+  Poly buf[5];
+  Poly* rest = &buf[0];
+  Poly* tmp = &buf[1];
+  Poly* strip = &buf[2];
+  Poly* srest = &buf[3];
+  Poly* piece = &buf[4];
+  clip_halfplane(poly, true, x0 + c0 * cw, +1.0, *rest);
   for (int c = c0; c <= c1; ++c) {
     const double right = x0 + (c + 1) * cw;
-    // strip = rest ∩ {x <= right} ∩ {x >= left}; rest = rest ∩ {x >= right}
-    if (c == c0) {
-      clip_halfplane(rest, true, x0 + c * cw, +1.0, tmp);
-      rest.swap(tmp);
-    }
-    clip_halfplane(rest, true, right, -1.0, strip);
+    clip_halfplane(*rest, true, right, -1.0, *strip);
     if (c < c1) {
-      clip_halfplane(rest, true, right, +1.0, tmp);
-      rest.swap(tmp);
+      clip_halfplane(*rest, true, right, +1.0, *tmp);
+      std::swap(rest, tmp);
     }
-    if (strip.size() < 3) continue;
-    Poly srest = strip;
-    clip_halfplane(srest, false, y0 + r0 * rh, +1.0, tmp2);
-    srest.swap(tmp2);
+    if (strip->size() < 3) continue;
+    clip_halfplane(*strip, false, y0 + r0 * rh, +1.0, *srest);
     for (int r = r0; r <= r1; ++r) {
       const double top = y0 + (r + 1) * rh;
-      clip_halfplane(srest, false, top, -1.0, piece);
+      clip_halfplane(*srest, false, top, -1.0, *piece);
       if (r < r1) {
-        clip_halfplane(srest, false, top, +1.0, tmp2);
-        srest.swap(tmp2);
+        clip_halfplane(*srest, false, top, +1.0, *tmp);
+        std::swap(srest, tmp);
       }
-      if (piece.size() >= 3) emit(c, r, piece);
-      if (srest.size() < 3) break;
+      if (piece->size() >= 3) emit(c, r, *piece);
+      if (srest->size() < 3) break;
     }
   }
 }

@@ -67,20 +67,26 @@ std::shared_ptr<const DctPlan> plan_for(int n) {
   return p;
 }
 
-// In-place iterative radix-2 FFT; inverse = conjugate twiddles, no 1/N scaling.
-void fft_inplace(const DctPlan& p, cplx* a, bool inverse) {
+// In-place iterative radix-2 FFT; inverse = conjugate twiddles, no 1/N scaling. Complex
+// products are written out (std::complex's operator* checks for infinities at -O2).
+void fft_inplace(const DctPlan& p, cplx* data, bool inverse) {
   const int n = p.n;
   for (int i = 0; i < n; ++i)
-    if (i < p.bitrev[i]) std::swap(a[i], a[p.bitrev[i]]);
+    if (i < p.bitrev[i]) std::swap(data[i], data[p.bitrev[i]]);
+  double* a = reinterpret_cast<double*>(data);  // interleaved re, im (std::complex layout)
+  const double sign = inverse ? -1.0 : 1.0;
   for (int len = 2; len <= n; len <<= 1) {
     const int half = len / 2, stride = n / len;
     for (int start = 0; start < n; start += len) {
       for (int j = 0; j < half; ++j) {
-        cplx w = p.twiddle[j * stride];
-        if (inverse) w = std::conj(w);
-        const cplx u = a[start + j], v = a[start + j + half] * w;
-        a[start + j] = u + v;
-        a[start + j + half] = u - v;
+        const double wr = p.twiddle[j * stride].real(), wi = sign * p.twiddle[j * stride].imag();
+        double* u = a + 2 * (start + j);
+        double* v = a + 2 * (start + j + half);
+        const double vr = v[0] * wr - v[1] * wi, vi = v[0] * wi + v[1] * wr;
+        v[0] = u[0] - vr;
+        v[1] = u[1] - vi;
+        u[0] += vr;
+        u[1] += vi;
       }
     }
   }
@@ -209,15 +215,13 @@ void NeumannPoissonGrid::smooth_and_solve(const MatrixXd& f, double sigma, Matri
   MatrixXd F = f;
   dct2_2d(F);
   if (sigma > 0) {
-    // Continuous Gaussian on the evenly extended field: exp(−σ²ω²/2) per cosine mode.
+    // Continuous Gaussian on the evenly extended field: exp(−σ²ω²/2) per cosine mode, which
+    // factors into an x part and a y part.
     const double ax = M_PI / (nx_ * hx_), ay = M_PI / (ny_ * hy_);
-    for (int c = 0; c < nx_; ++c) {
-      const double wx = ax * c;
-      for (int r = 0; r < ny_; ++r) {
-        const double wy = ay * r;
-        F(r, c) *= std::exp(-0.5 * sigma * sigma * (wx * wx + wy * wy));
-      }
-    }
+    VectorXd gx(nx_), gy(ny_);
+    for (int c = 0; c < nx_; ++c) gx[c] = std::exp(-0.5 * sigma * sigma * (ax * c) * (ax * c));
+    for (int r = 0; r < ny_; ++r) gy[r] = std::exp(-0.5 * sigma * sigma * (ay * r) * (ay * r));
+    for (int c = 0; c < nx_; ++c) F.col(c).array() *= gx[c] * gy.array();
   }
   if (f_smooth) {
     *f_smooth = F;

@@ -12,6 +12,7 @@ extern "C" {
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -134,6 +135,91 @@ void check_declared_sizes(const std::string& xml, const std::string& path) {
   }
 }
 
+// gifticlib's expat callbacks assume the document follows the GIFTI DTD and crash on some that do
+// not (found by fuzzing: a <Value> outside <MD> dereferences NULL inside gifticlib). So the XML is
+// parsed once with expat here and its element structure checked against the DTD
+// (gifti.projects.nitrc.org/gifti.dtd) before gifticlib sees it.
+struct StructureCheck {
+  struct Frame {
+    std::string name;
+    std::vector<std::string> children;
+  };
+  std::vector<Frame> stack;
+  std::string error;
+  bool seen_root = false;
+
+  static bool allowed(const std::string& parent, const std::string& child) {
+    if (parent.empty()) return child == "GIFTI";
+    if (parent == "GIFTI") return child == "MetaData" || child == "LabelTable" || child == "DataArray";
+    if (parent == "MetaData") return child == "MD";
+    if (parent == "MD") return child == "Name" || child == "Value";
+    if (parent == "LabelTable") return child == "Label";
+    if (parent == "DataArray") return child == "MetaData" || child == "CoordinateSystemTransformMatrix" || child == "Data";
+    if (parent == "CoordinateSystemTransformMatrix") return child == "DataSpace" || child == "TransformedSpace" || child == "MatrixData";
+    return false;  // Name, Value, Label, Data, DataSpace, ... hold text only
+  }
+  // The children an element must end up with, in order (DTD content models).
+  static std::string check_children(const Frame& f) {
+    const auto& c = f.children;
+    auto count = [&](const char* n) { return std::count(c.begin(), c.end(), n); };
+    if (f.name == "MD" && !(c.size() == 2 && c[0] == "Name" && c[1] == "Value")) return "<MD> must hold exactly <Name> then <Value>";
+    if (f.name == "CoordinateSystemTransformMatrix" &&
+        !(c.size() == 3 && c[0] == "DataSpace" && c[1] == "TransformedSpace" && c[2] == "MatrixData"))
+      return "<CoordinateSystemTransformMatrix> must hold <DataSpace>, <TransformedSpace>, <MatrixData>";
+    if (f.name == "DataArray") {
+      if (count("Data") != 1 || c.back() != "Data") return "<DataArray> must end with exactly one <Data>";
+      if (count("MetaData") > 1 || (count("MetaData") == 1 && c.front() != "MetaData")) return "<DataArray> has a misplaced <MetaData>";
+    }
+    if (f.name == "GIFTI") {
+      if (count("MetaData") > 1 || count("LabelTable") > 1) return "<GIFTI> has more than one <MetaData> or <LabelTable>";
+      bool data_seen = false;
+      for (const auto& n : c) {
+        if (n == "DataArray") data_seen = true;
+        else if (data_seen) return "<GIFTI> has <" + n + "> after a <DataArray>";
+      }
+    }
+    return {};
+  }
+  static void XMLCALL start(void* user, const XML_Char* name, const XML_Char**) {
+    auto* self = static_cast<StructureCheck*>(user);
+    if (!self->error.empty()) return;
+    const std::string parent = self->stack.empty() ? std::string() : self->stack.back().name;
+    if (parent.empty() && self->seen_root) {
+      self->error = "more than one root element";
+      return;
+    }
+    if (!allowed(parent, name)) {
+      self->error = "element <" + std::string(name) + "> is not allowed " + (parent.empty() ? "as the root" : "inside <" + parent + ">");
+      return;
+    }
+    if (!self->stack.empty()) self->stack.back().children.push_back(name);
+    self->stack.push_back({name, {}});
+    self->seen_root = true;
+  }
+  static void XMLCALL end(void* user, const XML_Char*) {
+    auto* self = static_cast<StructureCheck*>(user);
+    if (!self->error.empty() || self->stack.empty()) return;
+    const std::string problem = check_children(self->stack.back());
+    if (!problem.empty()) self->error = problem;
+    self->stack.pop_back();
+  }
+};
+
+void check_gifti_structure(const std::string& xml, const std::string& path) {
+  StructureCheck check;
+  XML_Parser parser = XML_ParserCreate(nullptr);
+  if (!parser) throw std::runtime_error(path + ": cannot create an XML parser");
+  XML_SetUserData(parser, &check);
+  XML_SetElementHandler(parser, StructureCheck::start, StructureCheck::end);
+  const int ok = XML_Parse(parser, xml.data(), static_cast<int>(std::min<std::size_t>(xml.size(), INT32_MAX)), 1);
+  std::string xml_error;
+  if (ok != XML_STATUS_OK)
+    xml_error = std::string(XML_ErrorString(XML_GetErrorCode(parser))) + " at line " + std::to_string(XML_GetCurrentLineNumber(parser));
+  XML_ParserFree(parser);
+  if (!check.error.empty()) fail(path, "invalid GIFTI structure: " + check.error, "the file is corrupt or not GIFTI");
+  if (!xml_error.empty()) fail(path, "invalid XML: " + xml_error, "the file is truncated or corrupt");
+}
+
 }  // namespace
 
 bool looks_like_gifti(const std::string& bytes) {
@@ -150,7 +236,9 @@ GiftiContents read_gifti(const std::string& path) {
   if (bytes.find("ExternalFileBinary") != std::string::npos)
     fail(path, "GIFTI data stored in an external file (ExternalFileBinary) is not supported",
          "re-save it with the data embedded (e.g. nibabel or wb_command -gifti-convert BASE64_BINARY)");
+  if (bytes.size() > static_cast<std::size_t>(INT32_MAX)) fail(path, "GIFTI XML larger than 2 GiB", "the file is not a plausible surface");
   check_declared_sizes(bytes, path);
+  check_gifti_structure(bytes, path);
   // gifticlib reads only uncompressed files from disk: inflate .gii.gz to a private temporary .gii.
   std::unique_ptr<TempFile> tmp;
   std::string file = path;

@@ -162,7 +162,7 @@ TEST(PlantedRegion, HasTheStatedDepthInThePetAlongTheSurface) {
   const an::Hemisphere right = an::mirror_hemisphere(left);
   const double radius = 22.0, depth = 0.25;
   const an::PlantedRegion r = an::plant_region(left, an::default_region_target(true, o), radius, depth);
-  const authalic::io::Volume healthy = an::synthetic_pet_template(left, o, 2.0);
+  const authalic::io::Volume healthy = an::synthetic_pet_template(left, o, 2.5);
   const std::vector<float> mult = an::region_multiplier(healthy, left, right, r);
   an::PhantomRng rng(3);
   an::SubjectEffects e = an::draw_subject_effects(rng);

@@ -63,6 +63,16 @@ TEST(RenderCli, DrawsFlatMapsSideBySide) {
       << output;
   const authalic::io::RgbImage img = authalic::io::read_png(png);
   EXPECT_GT(img.width, 2 * 300);
+  // --domain fit frames a map in mm (here the surface's x,y): its plain gray fill covers much of the picture.
+  const std::string fit = dir + "/fit.png";
+  ASSERT_EQ(run_command(authalic_binary() + " render " + fit + " " + dir + "/c/surf/lh.white --domain fit --width 300 -q", &output), 0)
+      << output;
+  const authalic::io::RgbImage fitted = authalic::io::read_png(fit);
+  long gray = 0;
+  for (int y = 0; y < fitted.height; ++y) {
+    for (int x = 0; x < fitted.width; ++x) gray += fitted.pixel(x, y)[0] == 210 && fitted.pixel(x, y)[2] == 210;
+  }
+  EXPECT_GT(gray, fitted.width * fitted.height / 3);
   EXPECT_EQ(run_command(authalic_binary() + " render " + png + " /nonexistent.gii", &output), 2) << output;
   EXPECT_EQ(run_command(authalic_binary() + " render " + png + " " + dir + "/c/surf/lh.white --colormap jet", &output), 2)
       << output;

@@ -139,7 +139,9 @@ TEST(SphereMap, HakerMapOfARoundSphereIsAMoebiusMap) {
     // measured: level 3 mean 0.020 rad (max 0.058), level 4 mean 0.011 (max 0.031)
     EXPECT_LT(ang.mean(), level == 3 ? 0.025 : 0.014);
     EXPECT_LT(ang.maxCoeff(), level == 3 ? 0.07 : 0.04);
-    if (level == 4) EXPECT_LT(ang.mean(), 0.7 * previous_mean);
+    if (level == 4) {
+      EXPECT_LT(ang.mean(), 0.7 * previous_mean);
+    }
     previous_mean = ang.mean();
   }
 }

@@ -223,3 +223,17 @@ TEST(Dicom, SeriesRoundTripInRas) {
   const Eigen::Vector4d corner = v.vox2ras * Eigen::Vector4d(0, 0, 0, 1);
   EXPECT_NEAR(value_at_world(r, corner), v.at(0, 0, 0), tol);
 }
+
+TEST(VolumeDispatch, ContentDecidesForUnknownExtensions) {
+  const std::string dir = temp_dir("volume_dispatch");
+  const Volume v = sample_volume();
+  write_mgh(dir + "/v.mgz", v);
+  std::filesystem::rename(dir + "/v.mgz", dir + "/v.volume");
+  EXPECT_EQ(read_volume(dir + "/v.volume").data, v.data);  // gzipped MGH recognised by content
+  write_nifti(dir + "/n.nii", v);
+  std::filesystem::rename(dir + "/n.nii", dir + "/n.dat");
+  expect_input_error([&] { read_volume(dir + "/n.dat"); }, dir + "/n.dat", "rename it to .nii");
+  write_bytes(dir + "/x.bin", "not a volume at all");
+  expect_input_error([&] { read_volume(dir + "/x.bin"); }, dir + "/x.bin", "unknown volume format");
+  expect_input_error([&] { read_volume(dir + "/missing.nii"); }, dir + "/missing.nii", "file not found");
+}

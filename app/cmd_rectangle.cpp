@@ -1,0 +1,310 @@
+// `authalic rectangle`: whole-brain authalic map onto the 2:1 rectangle [0, 2] x [0, 1]
+// (core/rectangle_map.h), in two forms:
+//   authalic rectangle OUT.surf.gii --surface S [--cut-from V --cut-to V]
+//   authalic rectangle OUT_PREFIX --lh S --lh-faces-from F --rh S --rh-faces-from F
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <tuple>
+
+#include "analysis/render.h"
+#include "analysis/report.h"
+#include "app/command.h"
+#include "app/map_json.h"
+#include "core/error.h"
+#include "core/metrics.h"
+#include "core/rectangle_map.h"
+#include "core/sulcal_depth.h"
+#include "io/image_io.h"
+#include "io/surface_io.h"
+
+namespace authalic::app {
+namespace {
+
+struct RectangleArgs {
+  std::string out;
+  std::string surface;
+  int cut_from = -1, cut_to = -1;
+  std::string lh, lh_faces, rh, rh_faces;
+  std::string metrics, png, histogram;
+  std::string sulc, lh_sulc, rh_sulc;
+  bool flat = false;
+  bool cut_surface = false;
+  bool initial_on_surface = false;
+  int k = 32;
+};
+
+std::string stem_of(const std::string& path) {
+  for (const char* ext : {".surf.gii", ".gii"}) {
+    const std::string e(ext);
+    if (path.size() > e.size() && path.compare(path.size() - e.size(), e.size(), e) == 0) return path.substr(0, path.size() - e.size());
+  }
+  return path;
+}
+
+// The map as a surface: x, y in the rectangle, z = 0.
+TriMesh as_flat_mesh(const MatrixXd& UV, const MatrixXi& F, double scale = 1.0) {
+  TriMesh m;
+  m.V = MatrixXd::Zero(UV.rows(), 3);
+  m.V.leftCols(2) = UV * scale;
+  m.F = F;
+  return m;
+}
+
+// Per-vertex values for the picture on a part's vertices: input vertices from `values`, added
+// vertices (cut copies: their origin; split vertices: mean of their input neighbours).
+VectorXd part_values(const RectanglePart& p, const VectorXd& values) {
+  VectorXd out = VectorXd::Constant(p.V.rows(), std::nan(""));
+  for (Eigen::Index i = 0; i < p.V.rows(); ++i)
+    if (p.vertex_origin[i] >= 0) out[i] = values[p.vertex_origin[i]];
+  VectorXd sum = VectorXd::Zero(p.V.rows()), count = VectorXd::Zero(p.V.rows());
+  for (Eigen::Index f = 0; f < p.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c)
+      for (int d = 1; d < 3; ++d) {
+        const int v = p.F(f, c), u = p.F(f, (c + d) % 3);
+        if (p.vertex_origin[v] < 0 && std::isfinite(out[u])) sum[v] += out[u], count[v] += 1;
+      }
+  for (Eigen::Index i = 0; i < p.V.rows(); ++i)
+    if (p.vertex_origin[i] < 0 && count[i] > 0) out[i] = sum[i] / count[i];
+  return out;
+}
+
+TriMesh read_cortex(const std::string& surface_path, const std::string& faces_path, io::Surface* surface) {
+  *surface = io::read_surface(surface_path);
+  TriMesh cortex = surface->mesh;
+  if (!faces_path.empty()) {
+    const io::Surface faces = io::read_surface(faces_path);
+    if (faces.mesh.num_vertices() != cortex.num_vertices())
+      throw InputError(faces_path + ": has " + std::to_string(faces.mesh.num_vertices()) + " vertices but " + surface_path +
+                       " has " + std::to_string(cortex.num_vertices()) + "; the face set must be on the same vertices");
+    cortex.F = faces.mesh.F;
+  }
+  return cortex;
+}
+
+nlohmann::json part_json(const RectanglePart& p) {
+  return {{"x0", p.x0},
+          {"width", p.width},
+          {"area_mm2", p.area_mm2},
+          {"vertices", p.V.rows()},
+          {"input_vertices", p.num_input_vertices},
+          {"faces", p.F.rows()},
+          {"anchor_vertex", p.anchor_vertex},
+          {"initial_flips", p.initial_flips},
+          {"flow",
+           {{"method", to_string(p.flow.method)},
+            {"iterations", p.flow.iterations},
+            {"polish_iterations", p.flow.polish_iterations},
+            {"converged", p.flow.converged},
+            {"stop_reason", p.flow.stop_reason},
+            {"repaired_vertices", p.flow.repaired},
+            {"flips", p.flow.flips}}}};
+}
+
+// Writes metrics, pictures and the requested extra surfaces for one or two parts.
+void finish(const RectangleArgs& a, const std::vector<const RectanglePart*>& parts, const std::vector<VectorXd>& shading,
+            nlohmann::json j, double seconds) {
+  // All parts as one mesh in the rectangle.
+  Eigen::Index nv = 0, nf = 0;
+  for (const auto* p : parts) nv += p->V.rows(), nf += p->F.rows();
+  MatrixXd V(nv, 3), UV(nv, 2), UV0(nv, 2);
+  MatrixXi F(nf, 3);
+  VectorXd values(nv);
+  Eigen::Index ov = 0, of = 0;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    const RectanglePart& p = *parts[i];
+    V.middleRows(ov, p.V.rows()) = p.V;
+    UV.middleRows(ov, p.V.rows()) = p.UV;
+    UV0.middleRows(ov, p.V.rows()) = p.UV_initial;
+    F.middleRows(of, p.F.rows()) = p.F.array() + static_cast<int>(ov);
+    values.segment(ov, p.V.rows()) = part_values(p, shading[i]);
+    ov += p.V.rows();
+    of += p.F.rows();
+  }
+  const MapMetrics m = map_metrics(V, UV, F, MapDomain::Rectangle, a.k);
+  j["metrics"] = metrics_json(m);
+  j["extent"] = {UV.col(0).minCoeff(), UV.col(1).minCoeff(), UV.col(0).maxCoeff(), UV.col(1).maxCoeff()};
+  j["seconds"] = seconds;
+  if (!a.metrics.empty()) {
+    j["initial_metrics"] = metrics_json(map_metrics(V, UV0, F, MapDomain::Rectangle, a.k));
+    write_json_file(a.metrics, j);
+  }
+  if (!a.png.empty()) {
+    analysis::ScalarColouring c;
+    c.values = values;
+    c.colormap = "gray_r";
+    c.label = a.sulc.empty() && a.lh_sulc.empty() ? "depth below smoothed surface (mm)" : "sulcal depth";
+    std::tie(c.vmin, c.vmax) = analysis::robust_range(values);
+    analysis::FlatRenderOptions o;
+    o.width = 1000;
+    o.domain_width = 2.0;
+    o.grid_cols = 2 * a.k;
+    o.grid_rows = a.k;
+    o.title = "authalic rectangle";
+    io::write_png(a.png, analysis::render_flat(UV, F, c, o));
+  }
+  if (!a.histogram.empty()) {
+    VectorXd up, la;
+    face_stretch_metrics(V, UV, F, &up, &la);
+    io::write_png(a.histogram, analysis::render_histograms({std::vector<double>(up.data(), up.data() + up.size()),
+                                                            std::vector<double>(la.data(), la.data() + la.size())},
+                                                           {"area distortion ln(g1 g2)", "angle distortion ln(g1/g2)"}, 60, 900, 360));
+  }
+  std::ostringstream line;
+  line << "rectangle: " << m.flips << " flipped faces, element CV " << m.element_cv << " (" << m.element_cols << "x"
+       << m.element_rows << "), per-face mean |ln area ratio| " << m.face_ln_area.mean << ", " << seconds << " s";
+  if (global_options().json) {
+    std::cout << j.dump(2) << '\n';
+  } else {
+    info(line.str());
+  }
+  if (m.flips > 0) {
+    std::cerr << "authalic: warning: " << m.flips << " faces of the rectangle map are flipped\n";
+    set_exit_code(3);
+  }
+}
+
+io::SurfaceWriteOptions flat_options(const std::string& structure, const std::string& what) {
+  io::SurfaceWriteOptions wo;
+  wo.geometric_type = "Flat";
+  wo.anatomical_structure = structure;
+  wo.metadata = {{"authalic_map", what}};
+  return wo;
+}
+
+void run_one_surface(const RectangleArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const io::Surface s = io::read_surface(a.surface);
+  RectangleMapOptions options;
+  options.cut_from = a.cut_from;
+  options.cut_to = a.cut_to;
+  options.initial_on_sphere = !a.initial_on_surface;
+  for (int v : {a.cut_from, a.cut_to})
+    if (v >= s.mesh.num_vertices())
+      throw InputError(a.surface + ": cut vertex " + std::to_string(v) + " is out of range; the surface has " +
+                       std::to_string(s.mesh.num_vertices()) + " vertices");
+  WholeBrainRectangle r;
+  try {
+    r = whole_brain_rectangle_map(s.mesh, options, terminal_progress());
+  } catch (const InputError& e) {
+    throw InputError(a.surface + ": " + e.what());
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string structure = s.metadata.count("AnatomicalStructurePrimary") ? s.metadata.at("AnatomicalStructurePrimary") : "";
+  io::write_surface(a.out, as_flat_mesh(r.map.UV, r.map.F), flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)"));
+  const std::string stem = stem_of(a.out);
+  if (a.flat) {
+    // 1 mm^2 of flat map = 1 mm^2 of cortex: the rectangle (area 2) scaled by sqrt(area / 2).
+    io::write_surface(stem + ".flat.surf.gii", as_flat_mesh(r.map.UV, r.map.F, std::sqrt(r.map.area_mm2 / 2.0)),
+                      flat_options(structure, "rectangle scaled to the cortical area (mm)"));
+  }
+  if (a.cut_surface) {
+    io::SurfaceWriteOptions wo;
+    wo.anatomical_structure = structure;
+    wo.metadata = {{"authalic_map", "input surface cut open along the rectangle's cut path (same vertices as the map)"}};
+    io::write_surface(stem + ".cut.surf.gii", TriMesh{r.map.V, r.map.F}, wo);
+  }
+  const VectorXd shading = a.png.empty() ? VectorXd::Zero(s.mesh.num_vertices())
+                           : a.sulc.empty() ? sulcal_depth_proxy(s.mesh.V, s.mesh.F)
+                                            : io::read_per_vertex(a.sulc, s.mesh.num_vertices());
+  nlohmann::json j = {{"form", "one surface"},
+                      {"surface", a.surface},
+                      {"output", a.out},
+                      {"cut_from", r.cut_path.front()},
+                      {"cut_to", r.cut_path.back()},
+                      {"cut_path_vertices", r.cut_path.size()},
+                      {"layout", "anterior cut vertex at (0, 0.5), posterior at (2, 0.5)"},
+                      {"initial_map", a.initial_on_surface ? "harmonic map of the cut surface" : "harmonic map of the cut authalic sphere image"},
+                      {"sphere_flips", r.sphere_flips},
+                      {"part", part_json(r.map)}};
+  finish(a, {&r.map}, {shading}, j, seconds);
+}
+
+void run_two_hemispheres(const RectangleArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  io::Surface ls, rs;
+  const TriMesh left = read_cortex(a.lh, a.lh_faces, &ls);
+  const TriMesh right = read_cortex(a.rh, a.rh_faces, &rs);
+  HemisphereRectangles r;
+  try {
+    r = hemisphere_rectangle_map(left, right, {}, terminal_progress());
+  } catch (const InputError& e) {
+    throw InputError(a.lh + ", " + a.rh + ": " + e.what());
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string lpath = a.out + ".lh.surf.gii", rpath = a.out + ".rh.surf.gii";
+  io::write_surface(lpath, as_flat_mesh(r.left.UV, r.left.F), flat_options("CortexLeft", "rectangle [0,2]x[0,1], left part"));
+  io::write_surface(rpath, as_flat_mesh(r.right.UV, r.right.F), flat_options("CortexRight", "rectangle [0,2]x[0,1], right part"));
+  if (a.flat) {
+    const double scale = std::sqrt((r.left.area_mm2 + r.right.area_mm2) / 2.0);
+    io::write_surface(a.out + ".lh.flat.surf.gii", as_flat_mesh(r.left.UV, r.left.F, scale), flat_options("CortexLeft", "rectangle scaled to the cortical area (mm)"));
+    io::write_surface(a.out + ".rh.flat.surf.gii", as_flat_mesh(r.right.UV, r.right.F, scale), flat_options("CortexRight", "rectangle scaled to the cortical area (mm)"));
+  }
+  auto shading = [&](const io::Surface& s, const std::string& sulc) -> VectorXd {
+    if (a.png.empty()) return VectorXd::Zero(s.mesh.num_vertices());
+    return sulc.empty() ? sulcal_depth_proxy(s.mesh.V, s.mesh.F) : io::read_per_vertex(sulc, s.mesh.num_vertices());
+  };
+  nlohmann::json j = {{"form", "two hemispheres"},
+                      {"lh", a.lh},
+                      {"rh", a.rh},
+                      {"outputs", {lpath, rpath}},
+                      {"split_x", r.split},
+                      {"layout", "left hemisphere on [0, split], right (mirrored) on [split, 2]; anterior at the top middle of each part"},
+                      {"left", part_json(r.left)},
+                      {"right", part_json(r.right)}};
+  finish(a, {&r.left, &r.right}, {shading(ls, a.lh_sulc), shading(rs, a.rh_sulc)}, j, seconds);
+}
+
+void setup(CLI::App& parent) {
+  auto a = std::make_shared<RectangleArgs>();
+  CLI::App* sub = parent.add_subcommand(
+      "rectangle",
+      "Area-preserving map of the whole brain onto the 2:1 rectangle [0,2] x [0,1]: either one closed genus-0 surface cut "
+      "open along an inferior-medial path (--surface), or two hemispheres side by side with widths proportional to their "
+      "cortical areas (--lh/--rh). Outputs are in rectangle coordinates (x in [0,2], y in [0,1]); element grid 2K x K. "
+      "Exit code 3 (after writing) if flipped faces remain.");
+  sub->add_option("OUT", a->out,
+                  "--surface: output map (GIFTI .surf.gii). --lh/--rh: output prefix, writes OUT.lh.surf.gii and OUT.rh.surf.gii")
+      ->required();
+  auto* surface = sub->add_option("--surface", a->surface, "One closed genus-0 whole-brain surface (mm)");
+  sub->add_option("--cut-from", a->cut_from, "Anterior cut vertex (default: the inferior-medial landmark rule)")->check(CLI::NonNegativeNumber)->needs(surface);
+  sub->add_option("--cut-to", a->cut_to, "Posterior cut vertex (default: the inferior-medial landmark rule)")->check(CLI::NonNegativeNumber)->needs(surface);
+  auto* lh = sub->add_option("--lh", a->lh, "Left hemisphere surface (mm)");
+  auto* rh = sub->add_option("--rh", a->rh, "Right hemisphere surface (mm)");
+  sub->add_option("--lh-faces-from", a->lh_faces, "Cortex face set of the left hemisphere: a surface on the same vertices (e.g. flat_left.gii.gz)")->needs(lh);
+  sub->add_option("--rh-faces-from", a->rh_faces, "Cortex face set of the right hemisphere (same vertices as --rh)")->needs(rh);
+  lh->needs(rh);
+  rh->needs(lh);
+  surface->excludes(lh)->excludes(rh);
+  sub->add_option("--metrics", a->metrics, "Write distortion metrics (JSON; areas in mm^2)");
+  sub->add_option("--png", a->png, "Write a PNG of the map shaded by sulcal depth, with the 2K x K element grid");
+  sub->add_option("--histogram", a->histogram, "Write a PNG histogram of the area and angle distortion per face");
+  sub->add_option("--sulc", a->sulc, "Per-vertex sulcal depth of --surface for the PNG (default: depth below a smoothed copy, mm)")->needs(surface);
+  sub->add_option("--lh-sulc", a->lh_sulc, "Per-vertex sulcal depth of --lh for the PNG")->needs(lh);
+  sub->add_option("--rh-sulc", a->rh_sulc, "Per-vertex sulcal depth of --rh for the PNG")->needs(rh);
+  sub->add_flag("--flat", a->flat, "Also write the map scaled to the cortical area (1 mm^2 flat = 1 mm^2 cortex): <stem>.flat.surf.gii");
+  sub->add_flag("--cut-surface", a->cut_surface,
+                "--surface form: also write the 3D surface cut open, on the map's vertices (<stem>.cut.surf.gii)")
+      ->needs(surface);
+  sub->add_flag("--initial-on-surface", a->initial_on_surface,
+                "--surface form: compute the initial harmonic map on the cut surface itself instead of on its authalic "
+                "sphere image (the literal construction; less robust, see docs/maps.md)")
+      ->needs(surface);
+  sub->add_option("--k", a->k, "Element grid: 2K x K cells")->check(CLI::Range(1, 512))->capture_default_str();
+  add_common_options(*sub);
+  sub->callback([a]() {
+    if (a->surface.empty() && a->lh.empty()) throw InputError("rectangle: give --surface S, or --lh S --rh S (see --help)");
+    if (!a->surface.empty()) {
+      run_one_surface(*a);
+    } else {
+      run_two_hemispheres(*a);
+    }
+  });
+}
+
+const bool registered = register_command({45, setup});
+
+}  // namespace
+}  // namespace authalic::app

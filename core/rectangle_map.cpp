@@ -1,0 +1,352 @@
+// Whole-brain maps onto the 2:1 rectangle: inferior-medial cut of a closed surface, or two
+// hemisphere parts side by side (see rectangle_map.h). The conformal initial map and the flow are
+// the square map's (core/conformal_map.h, core/authalic_flow.h) with W = 2 or the part's width.
+#include "core/rectangle_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <queue>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+
+#include "core/conformal_map.h"
+#include "core/error.h"
+#include "core/sphere_map.h"
+
+namespace authalic {
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+// Sorted, unique neighbours of every vertex.
+std::vector<std::vector<int>> vertex_neighbours(const MatrixXi& F, Eigen::Index nv) {
+  std::vector<std::vector<int>> adj(static_cast<std::size_t>(nv));
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      adj[F(f, c)].push_back(F(f, (c + 1) % 3));
+      adj[F(f, c)].push_back(F(f, (c + 2) % 3));
+    }
+  for (auto& a : adj) {
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+  }
+  return adj;
+}
+
+// Distances to the medial plane and to the lowest point (see inferior_medial_landmarks).
+void inferior_medial_distances(const MatrixXd& V, const MatrixXi& F, VectorXd* d_med, VectorXd* d_inf) {
+  const VectorXd w = barycentric_vertex_areas(V, F);
+  const double cx = V.col(0).dot(w) / w.sum();
+  double xmin = std::numeric_limits<double>::infinity(), xmax = -xmin, zmin = xmin;
+  for (Eigen::Index i = 0; i < V.rows(); ++i) {
+    if (!(w[i] > 0)) continue;
+    xmin = std::min(xmin, V(i, 0));
+    xmax = std::max(xmax, V(i, 0));
+    zmin = std::min(zmin, V(i, 2));
+  }
+  const double span = xmax - xmin;
+  // A whole brain spans both sides of the RAS midline x = 0 (each side at least a quarter of its
+  // width); its medial plane is x = c_x. Otherwise a hemisphere, whose medial side faces x = 0.
+  const bool whole = xmin < -0.25 * span && xmax > 0.25 * span;
+  d_med->resize(V.rows());
+  d_inf->resize(V.rows());
+  for (Eigen::Index i = 0; i < V.rows(); ++i) {
+    const double x = V(i, 0);
+    (*d_med)[i] = whole ? std::abs(x - cx) : (cx < 0 ? xmax - x : x - xmin);
+    (*d_inf)[i] = V(i, 2) - zmin;
+  }
+}
+
+double bounding_diagonal(const MatrixXd& V) {
+  return (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();
+}
+
+std::string topology_problem(const TopologyReport& t) { return t.summary(); }
+
+}  // namespace
+
+// ---- cutting --------------------------------------------------------------------------------
+
+std::pair<int, int> inferior_medial_landmarks(const MatrixXd& V, const MatrixXi& F) {
+  VectorXd d_med, d_inf;
+  inferior_medial_distances(V, F, &d_med, &d_inf);
+  std::vector<char> used(static_cast<std::size_t>(V.rows()), 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) used[F(f, c)] = 1;
+  double ymin = std::numeric_limits<double>::infinity(), ymax = -ymin;
+  for (Eigen::Index i = 0; i < V.rows(); ++i)
+    if (used[i]) ymin = std::min(ymin, V(i, 1)), ymax = std::max(ymax, V(i, 1));
+  int front = -1, back = -1;
+  double best_front = std::numeric_limits<double>::infinity(), best_back = best_front;
+  for (Eigen::Index i = 0; i < V.rows(); ++i) {
+    if (!used[i]) continue;
+    const double base = d_med[i] + d_inf[i];
+    const double sf = (ymax - V(i, 1)) + base, sb = (V(i, 1) - ymin) + base;
+    if (sf < best_front) best_front = sf, front = static_cast<int>(i);
+    if (sb < best_back) best_back = sb, back = static_cast<int>(i);
+  }
+  return {front, back};
+}
+
+std::vector<int> shortest_edge_path(const MatrixXd& V, const MatrixXi& F, int from, int to, const VectorXd* penalty) {
+  const Eigen::Index nv = V.rows();
+  if (from < 0 || to < 0 || from >= nv || to >= nv) throw InputError("cut path: vertex index out of range (the surface has " + std::to_string(nv) + " vertices)");
+  const auto adj = vertex_neighbours(F, nv);
+  std::vector<double> dist(static_cast<std::size_t>(nv), std::numeric_limits<double>::infinity());
+  std::vector<int> parent(static_cast<std::size_t>(nv), -1);
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+  dist[from] = 0;
+  queue.push({0.0, from});
+  while (!queue.empty()) {
+    const auto [d, v] = queue.top();
+    queue.pop();
+    if (d > dist[v]) continue;
+    if (v == to) break;
+    for (int u : adj[v]) {
+      double w = (V.row(u) - V.row(v)).norm();
+      if (penalty) w *= 1.0 + 0.5 * ((*penalty)[u] + (*penalty)[v]);
+      if (d + w < dist[u]) {
+        dist[u] = d + w;
+        parent[u] = v;
+        queue.push({dist[u], u});
+      }
+    }
+  }
+  if (!std::isfinite(dist[to])) throw InputError("cut path: vertices " + std::to_string(from) + " and " + std::to_string(to) + " are not connected");
+  std::vector<int> path;
+  for (int v = to; v != -1; v = parent[v]) path.push_back(v);
+  std::reverse(path.begin(), path.end());
+  return path;
+}
+
+std::vector<int> inferior_medial_path(const MatrixXd& V, const MatrixXi& F, int from, int to) {
+  VectorXd d_med, d_inf;
+  inferior_medial_distances(V, F, &d_med, &d_inf);
+  const VectorXd penalty = 4.0 * (d_med + d_inf) / bounding_diagonal(V);
+  return shortest_edge_path(V, F, from, to, &penalty);
+}
+
+CutSurface cut_along_path(const TriMesh& mesh, const std::vector<int>& path) {
+  const Eigen::Index nv = mesh.V.rows();
+  const MatrixXi& F = mesh.F;
+  if (path.size() < 3)
+    throw InputError("cut path has " + std::to_string(path.size()) + " vertices; it needs at least 3 (choose cut vertices that are not neighbours)");
+  {
+    std::vector<int> sorted = path;
+    std::sort(sorted.begin(), sorted.end());
+    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) throw InputError("cut path visits a vertex twice; it must be a simple path");
+    if (sorted.front() < 0 || sorted.back() >= nv) throw InputError("cut path: vertex index out of range");
+  }
+  // Corners (face, corner) around each vertex, and the face whose outgoing edge v -> a starts the
+  // counter-clockwise rotation at a.
+  std::vector<std::vector<std::pair<int, int>>> corners(static_cast<std::size_t>(nv));
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) corners[F(f, c)].push_back({static_cast<int>(f), c});
+
+  CutSurface cut;
+  cut.num_input_vertices = static_cast<int>(nv);
+  cut.path = path;
+  cut.mesh.F = F;
+  const int copies = static_cast<int>(path.size()) - 2;
+  cut.mesh.V.resize(nv + copies, mesh.V.cols());
+  cut.mesh.V.topRows(nv) = mesh.V;
+  cut.vertex_origin.resize(nv + copies);
+  for (Eigen::Index i = 0; i < nv; ++i) cut.vertex_origin[i] = static_cast<int>(i);
+  for (std::size_t i = 1; i + 1 < path.size(); ++i) {
+    const int v = path[i], prev = path[i - 1], next = path[i + 1];
+    const int copy = static_cast<int>(nv) + static_cast<int>(i) - 1;
+    cut.mesh.V.row(copy) = mesh.V.row(v);
+    cut.vertex_origin[copy] = v;
+    // Faces (v, a, b) turn counter-clockwise around v from edge v->a to v->b (seen from outside).
+    // Walking from `next` to `prev` sweeps the faces on the left of the path; they take the copy.
+    auto face_with_a = [&](int a) {
+      for (const auto& [f, c] : corners[v])
+        if (F(f, (c + 1) % 3) == a) return std::make_pair(f, c);
+      return std::make_pair(-1, -1);
+    };
+    auto [f, c] = face_with_a(next);
+    if (f < 0) throw InputError("cut path: vertices " + std::to_string(v) + " and " + std::to_string(next) + " are not joined by an edge");
+    for (std::size_t guard = 0; guard <= corners[v].size(); ++guard) {
+      cut.mesh.F(f, c) = copy;
+      const int b = F(f, (c + 2) % 3);
+      if (b == prev) break;
+      std::tie(f, c) = face_with_a(b);
+      if (f < 0 || guard == corners[v].size())
+        throw InputError("cut path: the surface around vertex " + std::to_string(v) + " is not a closed oriented fan, or " +
+                         std::to_string(prev) + " is not its neighbour");
+    }
+  }
+  return cut;
+}
+
+// ---- maps -----------------------------------------------------------------------------------
+
+namespace {
+
+// 3D positions of the vertices the initial map inserted (corner and ear splits), when the map was
+// computed on another embedding of the same mesh (the sphere): each lies on a split edge between
+// two input vertices that are its neighbours, at the same fraction of the edge.
+MatrixXd lift_inserted_vertices(const ConformalMapResult& cm, const MatrixXd& V3) {
+  const Eigen::Index n0 = V3.rows(), nv = cm.V.rows();
+  MatrixXd out(nv, 3);
+  out.topRows(n0) = V3;
+  if (nv == n0) return out;
+  std::vector<std::vector<int>> adj(static_cast<std::size_t>(nv));
+  for (Eigen::Index f = 0; f < cm.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) adj[cm.F(f, c)].push_back(cm.F(f, (c + 1) % 3));
+  for (Eigen::Index v = n0; v < nv; ++v) {
+    double best = std::numeric_limits<double>::infinity();
+    Eigen::RowVector3d pos = cm.V.row(v).head<3>();
+    const Eigen::RowVector3d p = cm.V.row(v).head<3>();
+    for (int a : adj[v])
+      for (int b : adj[v]) {
+        if (a >= n0 || b >= n0 || a >= b) continue;
+        const Eigen::RowVector3d d = cm.V.row(b).head<3>() - cm.V.row(a).head<3>();
+        const double s = (p - cm.V.row(a).head<3>()).dot(d) / d.squaredNorm();
+        const double err = (cm.V.row(a).head<3>() + s * d - p).norm();
+        if (s > 0 && s < 1 && err < best) best = err, pos = (1 - s) * V3.row(a) + s * V3.row(b);
+      }
+    out.row(v) = pos;
+  }
+  return out;
+}
+
+// The square map's initial map + flow for a disk on [0, width] x [0, 1] with a given anchor.
+// The initial map is computed on `G` (the surface itself, or another embedding of it such as its
+// authalic sphere image); the flow's target is always the area of V.
+RectanglePart map_disk(const MatrixXd& V, const MatrixXd& G, const MatrixXi& F, int anchor, double anchor_position, double width,
+                       const FlowOptions& flow_options, const ProgressFn& progress) {
+  RectangleBoundaryMap bm;
+  bm.width = width;
+  bm.anchor_vertex = anchor;
+  bm.anchor_position = anchor_position;
+  report(progress, "initial", 0.0, "conformal map onto [0, " + std::to_string(width) + "] x [0, 1]");
+  ConformalMapResult cm;
+  try {
+    cm = conformal_rectangle_map(G, F, bm);
+  } catch (const std::invalid_argument& e) {
+    throw ProcessingError(std::string("rectangle map: ") + e.what());
+  }
+  const MatrixXd V3 = lift_inserted_vertices(cm, V);
+  FlowOptions fo = flow_options;
+  fo.width = width;
+  FlowResult fr = authalic_flow(V3, cm.F, cm.UV, cm.side_mask, fo, progress);
+  RectanglePart part;
+  part.V = V3;
+  part.F = cm.F;
+  part.UV = fr.UV;
+  part.UV_initial = cm.UV;
+  part.flow = fr.report;
+  part.initial_flips = count_flipped(cm.UV, cm.F);
+  part.width = width;
+  part.num_input_vertices = static_cast<int>(V.rows());
+  part.anchor_vertex = anchor;
+  part.area_mm2 = face_areas(V3, cm.F).sum();
+  // Vertices inserted by the corner and ear splits have no input vertex.
+  part.vertex_origin = VectorXi::Constant(cm.V.rows(), -1);
+  for (Eigen::Index i = 0; i < V.rows(); ++i) part.vertex_origin[i] = static_cast<int>(i);
+  return part;
+}
+
+void check_disk(const MatrixXd& V, const MatrixXi& F, const std::string& what) {
+  const TopologyReport t = analyze_topology(V, F);
+  if (!t.is_disk() || !t.is_oriented())
+    throw InputError(what + " is not one oriented disk (" + topology_problem(t) +
+                     "); give the cortex face set of the hemisphere (e.g. --lh-faces-from flat_left.gii.gz)");
+}
+
+}  // namespace
+
+RectanglePart hemisphere_part_map(const TriMesh& cortex, double x0, double width, bool mirror, const FlowOptions& flow,
+                                  const ProgressFn& progress) {
+  MatrixXd V = cortex.V;
+  MatrixXi F = cortex.F;
+  if (mirror) {
+    // The right hemisphere as a left one: mirror x and reverse the triangles (outward again).
+    V.col(0) = -V.col(0);
+    F.col(1).swap(F.col(2));
+  }
+  // Anchor rule: the boundary vertex nearest to the most anterior (max y) cortex vertex goes to
+  // the middle of the top side.
+  const auto loops = boundary_loops(F, static_cast<int>(V.rows()));
+  if (loops.size() != 1) throw InputError("hemisphere cortex region has " + std::to_string(loops.size()) + " boundary loops; it must be one disk");
+  int front = -1;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c)
+      if (front < 0 || V(F(f, c), 1) > V(front, 1)) front = F(f, c);
+  int anchor = loops[0][0];
+  for (int b : loops[0])
+    if ((V.row(b) - V.row(front)).squaredNorm() < (V.row(anchor) - V.row(front)).squaredNorm()) anchor = b;
+  RectanglePart part = map_disk(V, V, F, anchor, rectangle_top_middle(width), width, flow, progress);
+  if (mirror) {
+    part.V.col(0) = -part.V.col(0);
+    part.F.col(1).swap(part.F.col(2));
+    part.UV.col(0) = width - part.UV.col(0).array();
+    part.UV_initial.col(0) = width - part.UV_initial.col(0).array();
+  }
+  part.UV.col(0).array() += x0;
+  part.UV_initial.col(0).array() += x0;
+  part.x0 = x0;
+  return part;
+}
+
+HemisphereRectangles hemisphere_rectangle_map(const TriMesh& left, const TriMesh& right, const RectangleMapOptions& options,
+                                              const ProgressFn& progress) {
+  check_disk(left.V, left.F, "left hemisphere cortex");
+  check_disk(right.V, right.F, "right hemisphere cortex");
+  const double al = face_areas(left.V, left.F).sum(), ar = face_areas(right.V, right.F).sum();
+  if (!(al > 0) || !(ar > 0)) throw InputError("hemisphere cortex has zero area");
+  HemisphereRectangles out;
+  // Widths proportional to cortical area: each unit of rectangle area holds the same cortex.
+  out.split = 2.0 * al / (al + ar);
+  out.left = hemisphere_part_map(left, 0.0, out.split, false, options.flow, progress);
+  out.right = hemisphere_part_map(right, out.split, 2.0 - out.split, true, options.flow, progress);
+  return out;
+}
+
+WholeBrainRectangle whole_brain_rectangle_map(const TriMesh& mesh, const RectangleMapOptions& options, const ProgressFn& progress) {
+  const TopologyReport t = analyze_topology(mesh.V, mesh.F);
+  if (!t.is_sphere() || !t.is_oriented())
+    throw InputError("surface is not a closed genus-0 surface (" + t.summary() +
+                     "); the one-surface rectangle needs a closed, oriented, genus-0 whole-brain surface (or use --lh/--rh)");
+  int from = options.cut_from, to = options.cut_to;
+  if (from < 0 || to < 0) {
+    const auto lm = inferior_medial_landmarks(mesh.V, mesh.F);
+    if (from < 0) from = lm.first;
+    if (to < 0) to = lm.second;
+  }
+  if (from == to) throw InputError("cut vertices are the same vertex (" + std::to_string(from) + "); give two different vertices");
+  WholeBrainRectangle out;
+  out.cut_path = inferior_medial_path(mesh.V, mesh.F, from, to);
+  const CutSurface cut = cut_along_path(mesh, out.cut_path);
+  const TopologyReport ct = analyze_topology(cut.mesh.V, cut.mesh.F);
+  if (!ct.is_disk()) throw ProcessingError("rectangle map: the cut surface is not a disk (" + ct.summary() + ")");
+  // The initial map. Measured on fsaverage5 white_left: the harmonic map of the cut surface itself
+  // has the slit's square-root singularity at both tips (density ~1/300 there) on top of the
+  // folding distortion, and the rectangle flow then leaves 270 flipped triangles; the same
+  // harmonic map computed on the surface's authalic sphere image (core/sphere_map.h) is smooth
+  // apart from the tips, and the flow ends with 0 flips, element CV 0.006. So by default the
+  // initial map is computed on the sphere image (boundary arc length measured there too), and
+  // the flow then restores the surface's own areas.
+  MatrixXd G = cut.mesh.V;
+  if (options.initial_on_sphere) {
+    report(progress, "sphere", 0.0, "authalic sphere map for the initial rectangle map");
+    SphereMapOptions so;
+    so.orient = false;
+    const SphereMapResult sr = authalic_sphere_map(mesh, so);
+    out.sphere_flips = sr.flips;
+    for (Eigen::Index i = 0; i < G.rows(); ++i) G.row(i) = sr.sphere.row(cut.vertex_origin[i]);
+  }
+  // The anterior landmark at the middle of the left side (perimeter coordinate 2W + 1.5).
+  out.map = map_disk(cut.mesh.V, G, cut.mesh.F, from, 2.0 * 2.0 + 1.5, 2.0, options.flow, progress);
+  out.map.num_input_vertices = cut.num_input_vertices;
+  for (Eigen::Index i = 0; i < cut.vertex_origin.size(); ++i) out.map.vertex_origin[i] = cut.vertex_origin[i];
+  return out;
+}
+
+}  // namespace authalic

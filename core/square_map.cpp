@@ -1,0 +1,120 @@
+// Region -> authalic square map, with the anatomical orientation rule (see core/square_map.h).
+#include "core/square_map.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace authalic {
+
+std::string disk_topology_problem(const MatrixXd& V, const MatrixXi& F) {
+  if (F.rows() == 0) return "the region has no faces; a square map needs a disk-shaped region";
+  const TopologyReport t = analyze_topology(V, F);
+  if (t.is_disk() && t.is_oriented()) return {};
+  std::ostringstream s;
+  s << "the region is not one disk (" << t.summary() << "; " << t.num_components << " component(s), "
+    << t.num_boundary_loops << " boundary loop(s), genus " << t.genus << ")";
+  if (t.num_boundary_loops == 0) {
+    s << "; a closed surface needs a cortex region (--label, --patch or --faces-from) or the sphere map";
+  } else if (!t.is_oriented()) {
+    s << "; its faces are not consistently oriented";
+  } else {
+    s << "; a square map needs exactly one component with one boundary loop and no handles";
+  }
+  return s.str();
+}
+
+MatrixXd extend_to_inserted(const MatrixXd& values, const ConformalMapResult& initial) {
+  const Eigen::Index n0 = initial.num_input_vertices, k = initial.inserted_parents.rows();
+  MatrixXd out(n0 + k, values.cols());
+  out.topRows(n0) = values.topRows(n0);
+  for (Eigen::Index i = 0; i < k; ++i) {
+    const double w = initial.inserted_weight[i];
+    out.row(n0 + i) = (1 - w) * out.row(initial.inserted_parents(i, 0)) + w * out.row(initial.inserted_parents(i, 1));
+  }
+  return out;
+}
+
+SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const SquareMapOptions& opt, const ProgressFn& progress) {
+  if (V.cols() != 3) throw InputError("surface: vertex coordinates must be 3D; give a 3D surface");
+  if (!(opt.width > 0)) throw InputError("square map: the rectangle width must be positive");
+  const std::string problem = disk_topology_problem(V, F_in);
+  if (!problem.empty()) throw InputError("region: " + problem);
+  if (opt.density.size() > 0) {
+    if (opt.density.size() != V.rows())
+      throw InputError("density: " + std::to_string(opt.density.size()) + " values for " + std::to_string(V.rows()) +
+                       " vertices; give one value per surface vertex");
+    for (Eigen::Index f = 0; f < F_in.rows(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const double d = opt.density[F_in(f, c)];
+        if (!(d > 0) || !std::isfinite(d))
+          throw InputError("density: vertex " + std::to_string(F_in(f, c)) + " of the region has density " +
+                           std::to_string(d) + "; densities must be positive and finite");
+      }
+  }
+
+  SquareMapResult R;
+  R.width = opt.width;
+  R.num_input_vertices = static_cast<int>(V.rows());
+  MatrixXi F = F_in;
+
+  // Rule 1: outward orientation. Σ (c_f − C)·(e1 x e2)/2 is the signed volume (x3) of the cone
+  // from C over the region: positive when the faces point away from the hemisphere's centre.
+  if (opt.orient_outward) {
+    const Eigen::Vector3d C = V.colwise().mean().transpose();
+    double vol = 0;
+    for (Eigen::Index f = 0; f < F.rows(); ++f) {
+      const Eigen::Vector3d a = V.row(F(f, 0)).transpose(), b = V.row(F(f, 1)).transpose(), c = V.row(F(f, 2)).transpose();
+      vol += ((a + b + c) / 3.0 - C).dot((b - a).cross(c - a));
+    }
+    if (vol < 0) {
+      F.col(1).swap(F.col(2));
+      R.faces_reversed = true;
+    }
+  }
+
+  // Rule 2: the frontal pole's nearest boundary point goes to the top middle.
+  RectangleBoundaryMap b;
+  b.width = opt.width;
+  b.sliding_boundary = opt.sliding_initial_boundary;
+  if (opt.anatomical_anchor) {
+    double best = -std::numeric_limits<double>::infinity();
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int v = F(f, c);
+        // Ties broken by the lowest index, so the rule does not depend on face order.
+        if (V(v, 1) > best || (V(v, 1) == best && v < R.anterior_vertex)) best = V(v, 1), R.anterior_vertex = v;
+      }
+    b.use_anchor_point = true;
+    b.anchor_point = V.row(R.anterior_vertex).transpose();
+    b.anchor_position = rectangle_top_middle(opt.width);
+  }
+  report(progress, "initial", -1, "conformal map");
+  ConformalMapResult init = conformal_rectangle_map(V, F, b);
+  R.surface_area = face_areas(init.V, init.F).sum();
+
+  FlowOptions fo = opt.flow;
+  fo.width = opt.width;
+  if (opt.density.size() > 0) fo.density = extend_to_inserted(opt.density, init).col(0);
+  FlowResult flow = authalic_flow(init.V, init.F, init.UV, init.side_mask, fo, progress);
+
+  R.V = std::move(init.V);
+  R.F = std::move(init.F);
+  R.UV_initial = std::move(init.UV);
+  R.UV = std::move(flow.UV);
+  R.face_origin = init.face_origin;
+  R.side_mask = init.side_mask;
+  R.flow = flow.report;
+  R.initial = std::move(init);
+  R.initial.V.resize(0, 3);
+  R.initial.F.resize(0, 3);
+  R.initial.UV.resize(0, 2);
+  R.flips = count_flipped(R.UV, R.F, 1e-12 * opt.width / std::max<Eigen::Index>(1, R.F.rows()));
+  if (R.flips > 0)
+    throw ProcessingError("square map: " + std::to_string(R.flips) +
+                          " triangles are still flipped after repair; the region may contain degenerate triangles");
+  return R;
+}
+
+}  // namespace authalic

@@ -1,0 +1,71 @@
+#pragma once
+// One call from a cortical region (a disk on a hemisphere surface) to its authalic map on the
+// unit square (or any rectangle [0, W] x [0, 1]): the square map of Zou et al. 2011 (seed 000,
+// seed 003 section 3) with the measure control of DLF (seed 004 section 5.5).
+//
+//   square_map(V, F_region) = authalic_flow(conformal_rectangle_map(V, F_region))
+//
+// Anatomical orientation rule (so homologous anatomy lands in the same part of the square across
+// subjects; coordinates are RAS, i.e. +y anterior, as FreeSurfer and GIFTI surfaces are):
+//  1. Faces are oriented outward (counter-clockwise seen from outside the hemisphere; tested by
+//     the sign of Σ (c_f − C)·n_f area_f over the region, C the centroid of all of V; reversed
+//     if negative). The map preserves orientation, so the lateral surface faces the viewer of
+//     the square (x to the right, y up), as if looking at the hemisphere from outside.
+//  2. The point of the region's boundary nearest to the most anterior region vertex (largest y,
+//     the frontal pole) goes to the middle of the top side, (W/2, 1); the rest of the boundary
+//     follows by arc length, counter-clockwise.
+//  3. Consequently a right hemisphere's map is the mirror image (x -> W − x) of the left's: both
+//     are seen from their own lateral side with the frontal pole up.
+// Output indexing: V's vertices first, in V's order (those outside the region stay, unused by any
+// face), then the vertices inserted by corner and ear splits; faces are the region's faces with
+// split ones replaced by their pieces.
+#include <string>
+
+#include "core/authalic_flow.h"
+#include "core/conformal_map.h"
+#include "core/mesh.h"
+#include "core/progress.h"
+
+namespace authalic {
+
+struct SquareMapOptions {
+  double width = 1.0;        // 1: the unit square; 2: the whole-brain 1:2 rectangle; any W > 0
+  FlowOptions flow;          // flow.width is set from `width`
+  VectorXd density;          // optional per-vertex density (#V of the input, > 0), DLF 5.5
+  bool anatomical_anchor = true;  // rule 2 above; false: the boundary starts at its first vertex at (0, 0)
+  bool orient_outward = true;     // rule 1 above
+  bool sliding_initial_boundary = false;  // see RectangleBoundaryMap::sliding_boundary
+};
+
+struct SquareMapResult {
+  MatrixXd V;            // #V' x 3: surface positions (input's, then inserted)
+  MatrixXi F;            // #F' x 3: region faces after splits (outward orientation)
+  MatrixXd UV;           // #V' x 2: the authalic map, in [0, W] x [0, 1]; unused vertices (0, 0)
+  MatrixXd UV_initial;   // #V' x 2: the conformal initial map
+  VectorXi face_origin;  // #F': index of the region face (row of the input F) each face comes from
+  VectorXi side_mask;    // #V': RectangleSide bits of boundary vertices
+  int num_input_vertices = 0;
+  double width = 1.0;
+  double surface_area = 0;   // 3D area of the region (mm^2 for cortex)
+  bool faces_reversed = false;
+  int anterior_vertex = -1;  // the most anterior region vertex (rule 2)
+  ConformalMapResult initial;  // split counts, weights used (V/F/UV moved into the fields above)
+  FlowReport flow;
+  int flips = 0;             // flipped or degenerate faces of UV (0 unless something failed)
+};
+
+// Empty when (V, F) is one disk; otherwise a one-line description of the measured topology and
+// what a square map needs, for an InputError message.
+std::string disk_topology_problem(const MatrixXd& V, const MatrixXi& F);
+
+// The map. V: #V x 3 (mm, RAS), F: region faces (a disk). Throws InputError when the region is
+// not a disk (message from disk_topology_problem) or the density is invalid, ProcessingError if
+// the result still has flipped triangles.
+SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F, const SquareMapOptions& options,
+                           const ProgressFn& progress = {});
+
+// Per-vertex data of the input extended to the inserted vertices (interpolated like their
+// positions). values: #num_input_vertices x k.
+MatrixXd extend_to_inserted(const MatrixXd& values, const ConformalMapResult& initial);
+
+}  // namespace authalic

@@ -1,0 +1,87 @@
+// `authalic elements` end to end: a flat cortex whose square map is authalic, outputs checked.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "analysis/elements.h"
+#include "common/test_data.h"
+#include "core/mesh.h"
+#include "io/surface_io.h"
+#include "io/volume_io.h"
+
+namespace authalic {
+namespace {
+
+TriMesh unit_grid(int n) {
+  TriMesh m;
+  m.V.resize(n * n, 3);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) m.V.row(j * n + i) << double(i) / (n - 1), double(j) / (n - 1), 0.0;
+  m.F.resize(2 * (n - 1) * (n - 1), 3);
+  int f = 0;
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int a = j * n + i;
+      m.F.row(f++) << a, a + 1, a + n + 1;
+      m.F.row(f++) << a, a + n + 1, a + n;
+    }
+  return m;
+}
+
+TEST(ElementsCli, WritesTableImagesAndLabelsWithEqualAreasOnAnIsometricMap) {
+  const std::string dir = test::temp_dir("elements_cli");
+  const TriMesh map = unit_grid(33);
+  TriMesh surface = map;
+  surface.V *= 40.0;  // 40 x 40 mm of flat cortex
+  io::write_surface(dir + "/lh.white.surf.gii", surface);
+  io::write_surface(dir + "/lh.map.surf.gii", map);
+  VectorXd values = surface.V.col(0) / 40.0;  // 0..1 across x
+  io::FuncWriteOptions fo;
+  fo.metadata = {{"normalisation", "global"}, {"units", "ratio to the global cortical mean"}};
+  io::write_per_vertex(dir + "/pet.func.gii", values, fo);
+  std::string out;
+  const std::string cmd = test::authalic_binary() + " elements " + dir + "/lh.white.surf.gii " + dir + "/lh.map.surf.gii " + dir +
+                          "/pet.func.gii " + dir + "/el --k 8 --subject s01 --age 70 --json";
+  ASSERT_EQ(test::run_command(cmd, &out), 0) << out;
+  const auto j = nlohmann::json::parse(out.substr(out.find('{')));
+  EXPECT_LT(j["element_area_cv"].get<double>(), 1e-9);
+  EXPECT_NEAR(j["total_area_mm2"].get<double>(), 1600.0, 1e-6);
+  EXPECT_EQ(j["hemisphere"], "left");
+  for (const char* suffix : {".csv", ".json", ".nii.gz", "_area.nii.gz", ".png", "_3d.png", ".label.gii"})
+    EXPECT_TRUE(std::filesystem::exists(dir + "/el" + suffix)) << suffix;
+
+  const analysis::ElementTable t = analysis::read_element_table(dir + "/el.csv");
+  EXPECT_EQ(t.normalisation, "global");
+  EXPECT_EQ(t.subject_id, "s01");
+  EXPECT_EQ(t.age, 70.0);
+  ASSERT_EQ(t.blocks.size(), 1u);
+  for (const auto& e : t.blocks[0].elements) {
+    EXPECT_NEAR(e.area_mm2, 25.0, 1e-9);                    // 1600 mm^2 / 64
+    EXPECT_NEAR(e.value, (e.col + 0.5) / 8.0, 1e-6);        // linear value: its cell-centre value
+    EXPECT_NEAR(e.centroid.x(), 40.0 * (e.col + 0.5) / 8, 1e-9);
+  }
+  const io::Volume img = io::read_volume(dir + "/el.nii.gz");
+  EXPECT_EQ(img.dims[0], 8);
+  EXPECT_NEAR(img.at(3, 5, 0), 3.5 / 8.0, 1e-6);
+  const io::Volume area = io::read_volume(dir + "/el_area.nii.gz");
+  EXPECT_NEAR(area.at(7, 0, 0), 25.0, 1e-4);
+  const VectorXd labels = io::read_per_vertex(dir + "/el.label.gii", surface.num_vertices());
+  EXPECT_EQ(labels(0), 1);                // vertex (0,0): element 0 -> key 1
+  EXPECT_EQ(labels(33 * 33 - 1), 64);     // vertex (1,1): element 63 -> key 64
+
+  // Bad input: a map that is not a square.
+  TriMesh wide = map;
+  wide.V.col(0) *= 3.0;
+  io::write_surface(dir + "/wide.surf.gii", wide);
+  EXPECT_EQ(test::run_command(test::authalic_binary() + " elements " + dir + "/lh.white.surf.gii " + dir + "/wide.surf.gii " + dir +
+                                  "/pet.func.gii " + dir + "/bad",
+                              &out),
+            2);
+  EXPECT_NE(out.find("wide.surf.gii: the map spans"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/bad.csv"));
+}
+
+}  // namespace
+}  // namespace authalic

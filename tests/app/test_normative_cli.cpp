@@ -1,0 +1,107 @@
+// `authalic normative build|merge|compare` end to end on small element tables.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "analysis/normative.h"
+#include "common/test_data.h"
+#include "io/surface_io.h"
+#include "io/volume_io.h"
+
+namespace authalic {
+namespace {
+
+analysis::ElementTable table(const std::string& id, double age, const std::function<double(int)>& value) {
+  analysis::ElementTable t;
+  t.grid = analysis::element_grid(analysis::ElementDomain::Square, 4);
+  t.normalisation = "global";
+  t.units = "ratio to the global cortical mean";
+  t.subject_id = id;
+  t.age = age;
+  analysis::ElementBlock b{"left", {}};
+  for (int e = 0; e < 16; ++e) {
+    analysis::Element el;
+    el.id = e;
+    el.row = e / 4;
+    el.col = e % 4;
+    el.area_mm2 = 50;
+    el.centroid = Eigen::Vector3d(-40, e, 10);
+    el.value = value(e);
+    el.n_vertices = 10;
+    b.elements.push_back(el);
+  }
+  t.blocks.push_back(b);
+  return t;
+}
+
+TEST(NormativeCli, BuildMergeCompare) {
+  const std::string dir = test::temp_dir("normative_cli");
+  std::vector<std::string> paths;
+  for (int s = 0; s < 10; ++s) {
+    paths.push_back(dir + "/c" + std::to_string(s) + "_elements.csv");
+    analysis::write_element_table(paths.back(), table("c" + std::to_string(s), 60 + s, [&](int e) {
+      return 1.0 + 0.1 * std::sin(1.7 * s + 0.3 * e);
+    }));
+  }
+  const std::string exe = test::authalic_binary();
+  std::string out, all, first, second;
+  for (int s = 0; s < 10; ++s) (s < 5 ? first : second) += " " + paths[static_cast<std::size_t>(s)];
+  ASSERT_EQ(test::run_command(exe + " normative build " + dir + "/all.json" + first + second + " --json", &out), 0) << out;
+  EXPECT_EQ(nlohmann::json::parse(out.substr(out.find('{')))["num_subjects"], 10);
+  ASSERT_EQ(test::run_command(exe + " normative build " + dir + "/a.json" + first + " --quiet", &out), 0) << out;
+  ASSERT_EQ(test::run_command(exe + " normative build " + dir + "/b.json" + second + " --quiet", &out), 0) << out;
+  ASSERT_EQ(test::run_command(exe + " normative merge " + dir + "/merged.json " + dir + "/a.json " + dir + "/b.json --quiet", &out), 0) << out;
+  const auto whole = analysis::read_reference(dir + "/all.json"), merged = analysis::read_reference(dir + "/merged.json");
+  for (int i = 0; i < 16; ++i) {
+    EXPECT_NEAR(merged.mean[i], whole.mean[i], 1e-14);
+    EXPECT_NEAR(merged.m2[i], whole.m2[i], 1e-12);
+  }
+  // Merging a reference with itself counts subjects twice: refused.
+  EXPECT_EQ(test::run_command(exe + " normative merge " + dir + "/twice.json " + dir + "/a.json " + dir + "/a.json", &out), 2);
+  EXPECT_NE(out.find("is already in the reference"), std::string::npos) << out;
+
+  // A patient 30% low in elements 5, 6, 9 (a 2x2-ish patch) and normal elsewhere.
+  const auto patient = table("p1", 65, [&](int e) { return (e == 5 || e == 6 || e == 9) ? 0.7 : whole.mean[e]; });
+  analysis::write_element_table(dir + "/p1_elements.csv", patient);
+  VectorXd labels(4);
+  labels << 1, 6, 7, 0;  // four vertices in elements 0, 5, 6 and none
+  io::write_per_vertex(dir + "/el.label.gii", labels);
+  ASSERT_EQ(test::run_command(exe + " normative compare " + dir + "/merged.json " + dir + "/p1_elements.csv " + dir +
+                                  "/cmp --labels " + dir + "/el.label.gii --json",
+                              &out),
+            0)
+      << out;
+  const auto j = nlohmann::json::parse(out.substr(out.find('{')));
+  EXPECT_EQ(j["counts"]["hypo"], 3);
+  EXPECT_EQ(j["counts"]["hyper"], 0);
+  ASSERT_EQ(j["clusters"].size(), 1u);
+  EXPECT_EQ(j["clusters"][0]["num_elements"], 3);
+  EXPECT_DOUBLE_EQ(j["clusters"][0]["area_mm2"].get<double>(), 150.0);
+  EXPECT_EQ(j["clusters"][0]["sign"], "hypo");
+  for (const char* suffix : {"_z.nii.gz", "_z.png", "_abnormal.csv", ".json", "_z.func.gii"})
+    EXPECT_TRUE(std::filesystem::exists(dir + "/cmp" + suffix)) << suffix;
+  const VectorXd zv = io::read_per_vertex(dir + "/cmp_z.func.gii");
+  const io::Volume z = io::read_volume(dir + "/cmp_z.nii.gz");
+  EXPECT_NEAR(zv(1), z.at(1, 1, 0), 1e-5);  // element 5 = (row 1, col 1)
+  EXPECT_LT(zv(1), -2.0);
+  EXPECT_TRUE(std::isnan(zv(3)));
+  std::ifstream csv(dir + "/cmp_abnormal.csv");
+  std::string line;
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 4);  // header + 3 elements
+
+  // Incompatible patient (K = 2 table) -> exit 2 with the reason.
+  analysis::ElementTable small = table("p2", 60, [](int) { return 1.0; });
+  small.grid = analysis::element_grid(analysis::ElementDomain::Square, 2);
+  small.blocks[0].elements.resize(4);
+  analysis::write_element_table(dir + "/p2_elements.csv", small);
+  EXPECT_EQ(test::run_command(exe + " normative compare " + dir + "/merged.json " + dir + "/p2_elements.csv " + dir + "/cmp2", &out), 2);
+  EXPECT_NE(out.find("K is 2 but the reference has 4"), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace authalic

@@ -1,0 +1,57 @@
+// Inputs found by scripts/fuzz.sh (libFuzzer) that crashed a reader, kept as regression tests:
+// each must now be refused with an InputError naming the file.
+#include <gtest/gtest.h>
+
+#include "io/io_test_util.h"
+#include "io/surface_io.h"
+
+using namespace authalic;
+using namespace authalic::io;
+using namespace authalic::test;
+
+namespace {
+std::string write_case(const std::string& dir, const std::string& name, const std::string& bytes) {
+  const std::string path = dir + "/" + name;
+  write_bytes(path, bytes);
+  return path;
+}
+}  // namespace
+
+// gifticlib dereferenced NULL (SEGV inside its expat callback) for a <Value> outside <MD>;
+// the reader now checks the XML structure against the GIFTI DTD before gifticlib parses it.
+TEST(FuzzRegression, GiftiValueOutsideMdCrashedGifticlib) {
+  const std::string dir = temp_dir("fuzz_gifti_value");
+  const std::string bytes =
+    "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    "<!DOCTYPE GIFTI SYSTEM \"http://gifti.projects.nitrc.org/gifti.dtd\">\n"
+    "<GIFTI Version=\"1.0\"  NumberOfDataArrays=\"1\">\n"
+    "   <MetaData>\n"
+    "      <MD>\n"
+    "         <Name><![CDATA[generator]]></Name>\n"
+    "         <Value><![CDATA[authalic]]></Value>\n"
+    "      </MD>>\n"
+    "         <Value><![CDATA[gifti library version 1.09, 28 June, 2010]]></Value>\n"
+    "      </MD>\n"
+    "   </MetaData>\n"
+    "   <LabelTable>\n"
+    "      <Label Key=\"0\" Red=\"1\" Green=\"0.25\" Blue=\"0.25\" Alpha=\"0\"><![CDATA[???]]></Label>\n"
+    "      <Label Key=\"1\" Red=\"0.131316\" Green=\"0.976838\" Blue=\"0.391846\" Alpha=\"1\"><![CDATA[x]]></Label>\n"
+    "      <Label Key=\"2\" Red=\"0.543713\" Green=\"0.0467889\" Blue=\"0.909498\" Alpha=\"1\"><![CDATA[y]]></Label>\n"
+    "   </LabelTable>\n"
+    "   <DataArray Intent=\"NIFTI_INTENT\xa1""\xad""ABEL\"\n"
+    "              DataType=\"NIFTI_TYPE_INT32\"\n"
+    "              ArrayIndexingOrder=\"RowMajorOrder\"\n"
+    "              Dimensionality=\"1\"\n"
+    "              Dim0=\"4\"\n"
+    "              Encoding=\"GZipBase64Binary\"\n"
+    "              Endian=\"LittleEndian\"\n"
+    "              ExternalFileName=\"\"\n"
+    "              ExternalFileOffset=\"\">\n"
+    "      <MetaData/>\n"
+    "      <Data>eJxjYGBgYIRiJiAGAAAsAAU=</Data>\n"
+    "   </DataArray>\n"
+    "</GIFTI>\n"
+    "";
+  const std::string path = write_case(dir, "crash1.label.gii", bytes);
+  expect_input_error([&] { read_region_vertices(path); }, path, "<Value> is not allowed inside <MetaData>");
+}
