@@ -427,7 +427,7 @@ void write_element_table(const std::string& csv_path, const ElementTable& table)
   io::write_file_atomically(csv_path, csv);
 }
 
-ElementTable read_element_table(const std::string& csv_path) {
+ElementTable read_element_table(const std::string& csv_path, bool values_only) {
   const std::string sidecar = element_sidecar_path(csv_path);
   ElementTable t;
   {
@@ -464,11 +464,7 @@ ElementTable read_element_table(const std::string& csv_path) {
   std::string text;
   if (!read_text_file(csv_path, text)) throw InputError(csv_path + ": cannot read the element table");
   const int ne = t.grid.num_elements();
-  std::map<std::string, int> block_of;
-  for (std::size_t b = 0; b < t.blocks.size(); ++b) {
-    t.blocks[b].elements.assign(static_cast<std::size_t>(ne), Element{});
-    block_of[t.blocks[b].hemisphere] = static_cast<int>(b);
-  }
+  for (auto& b : t.blocks) b.elements.assign(static_cast<std::size_t>(ne), Element{});
   std::vector<char> seen(static_cast<std::size_t>(ne) * t.blocks.size(), 0);
   CsvCursor cur(text, csv_path);
   cur.expect_header("id,hemisphere,row,col,area_mm2,centroid_x_mm,centroid_y_mm,centroid_z_mm,value,n_vertices");
@@ -479,22 +475,30 @@ ElementTable read_element_table(const std::string& csv_path) {
     const std::string_view hemi = cur.field();
     e.row = cur.integer();
     e.col = cur.integer();
-    e.area_mm2 = cur.number();
-    e.centroid.x() = cur.number();
-    e.centroid.y() = cur.number();
-    e.centroid.z() = cur.number();
-    e.value = cur.number();
-    e.n_vertices = cur.integer();
+    if (values_only) {
+      for (int k = 0; k < 4; ++k) cur.skip();
+      e.value = cur.number();
+      cur.skip();
+    } else {
+      e.area_mm2 = cur.number();
+      e.centroid.x() = cur.number();
+      e.centroid.y() = cur.number();
+      e.centroid.z() = cur.number();
+      e.value = cur.number();
+      e.n_vertices = cur.integer();
+    }
     cur.end_line();
-    const auto it = block_of.find(std::string(hemi));
-    if (it == block_of.end()) cur.fail("hemisphere '" + std::string(hemi) + "' is not listed in the sidecar");
+    int block = -1;  // linear search: one or two blocks, and no allocation per row
+    for (std::size_t b = 0; b < t.blocks.size(); ++b)
+      if (t.blocks[b].hemisphere == hemi) block = static_cast<int>(b);
+    if (block < 0) cur.fail("hemisphere '" + std::string(hemi) + "' is not listed in the sidecar");
     if (e.id < 0 || e.id >= ne || e.row != e.id / t.grid.cols || e.col != e.id % t.grid.cols)
       cur.fail("element id " + std::to_string(e.id) + " does not match row " + std::to_string(e.row) + ", col " +
                std::to_string(e.col) + " of a " + std::to_string(t.grid.rows) + " x " + std::to_string(t.grid.cols) + " grid");
-    char& s = seen[static_cast<std::size_t>(it->second) * ne + e.id];
+    char& s = seen[static_cast<std::size_t>(block) * ne + e.id];
     if (s) cur.fail("element " + std::to_string(e.id) + " of hemisphere " + std::string(hemi) + " appears twice");
     s = 1;
-    t.blocks[static_cast<std::size_t>(it->second)].elements[static_cast<std::size_t>(e.id)] = e;
+    t.blocks[static_cast<std::size_t>(block)].elements[static_cast<std::size_t>(e.id)] = e;
     ++count;
   }
   if (count != seen.size())

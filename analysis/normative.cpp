@@ -204,7 +204,7 @@ NormativeReference build_reference(const std::vector<std::string>& paths, const 
     for (int s = 0; s < count; ++s) {
       errors[static_cast<std::size_t>(s)].clear();
       try {
-        tables[static_cast<std::size_t>(s)] = read_element_table(paths[first + static_cast<std::size_t>(s)]);
+        tables[static_cast<std::size_t>(s)] = read_element_table(paths[first + static_cast<std::size_t>(s)], true);
       } catch (const std::exception& e) {
         errors[static_cast<std::size_t>(s)] = e.what();
       }

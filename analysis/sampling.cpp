@@ -246,9 +246,11 @@ SamplingResult sample_normal_projection(const io::Volume& volume, const MatrixXd
     if (!used[static_cast<std::size_t>(v)]) continue;
     const Eigen::Vector3d n = N.row(v).transpose();
     if (n.squaredNorm() == 0) continue;
-    const Eigen::Vector3d x = V_world.row(v).head<3>().transpose();
+    // Walk in voxel indices: one affine transform per vertex, not per sample.
+    const Eigen::Vector3d x = sampler.to_index(V_world.row(v).head<3>().transpose());
+    const Eigen::Vector3d d = sampler.direction_to_index((sign * r.step_mm) * n);
     SegmentStat s{options.statistic};
-    for (int k = 0; k <= intervals; ++k) s.add(sampler(x + (sign * k * r.step_mm) * n));
+    for (int k = 0; k <= intervals; ++k) s.add(sampler.at_index(x + k * d));
     r.values(v) = s.value();
   }
   r.method = std::string("normal projection, ") + (options.outward ? "outward" : "inward (inverse normal)") + ", depth " +
@@ -283,10 +285,11 @@ SamplingResult sample_ribbon(const io::Volume& volume, const MatrixXd& white_wor
     const Eigen::Vector3d b = pial_world.row(v).head<3>().transpose();
     const double length = (b - a).norm();
     const int intervals = std::max(min_intervals, static_cast<int>(std::ceil(length / max_step - 1e-9)));
+    const Eigen::Vector3d ia = sampler.to_index(a), ib = sampler.to_index(b);
     SegmentStat s{options.statistic};
     for (int k = 0; k <= intervals; ++k) {
       const double t = static_cast<double>(k) / intervals;
-      s.add(sampler((1 - t) * a + t * b));
+      s.add(sampler.at_index((1 - t) * ia + t * ib));
     }
     r.values(v) = s.value();
   }

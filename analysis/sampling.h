@@ -36,6 +36,8 @@ class TrilinearSampler {
   // Value at continuous voxel indices (i, j, k), voxel centres at integers.
   double at_index(const Eigen::Vector3d& index) const;
   Eigen::Vector3d to_index(const Eigen::Vector3d& world) const { return ras2vox_ * world + ras2vox_t_; }
+  // A world displacement (mm) in voxel indices.
+  Eigen::Vector3d direction_to_index(const Eigen::Vector3d& d) const { return ras2vox_ * d; }
   // Is the world point within the field of view (half a voxel beyond the outer voxel centres)?
   bool inside(const Eigen::Vector3d& world) const;
 

@@ -97,6 +97,8 @@ double CsvCursor::number() {
   return v;
 }
 
+void CsvCursor::skip() { field(); }
+
 void CsvCursor::end_line() {
   if (!at_end_of_fields_) fail("too many fields");
 }

@@ -25,6 +25,7 @@ class CsvCursor {
   std::string_view field();   // the next field as text
   int integer();
   double number();            // accepts "nan", "inf", "-inf" and an empty field (NaN)
+  void skip();                // skips the next field (it must exist)
   void end_line();            // checks that the line has no more fields
   [[noreturn]] void fail(const std::string& problem) const;
   int line_number() const { return line_; }

@@ -32,7 +32,7 @@ struct RectangleArgs {
   std::string sulc, lh_sulc, rh_sulc;
   bool flat = false;
   bool cut_surface = false;
-  bool initial_on_surface = false;
+  std::string initial = "auto";
   int k = 32;
 };
 
@@ -180,7 +180,9 @@ void run_one_surface(const RectangleArgs& a) {
   RectangleMapOptions options;
   options.cut_from = a.cut_from;
   options.cut_to = a.cut_to;
-  options.initial_on_sphere = !a.initial_on_surface;
+  options.initial = a.initial == "surface" ? RectangleInitial::Surface
+                    : a.initial == "sphere"  ? RectangleInitial::Sphere
+                                             : RectangleInitial::Auto;
   for (int v : {a.cut_from, a.cut_to})
     if (v >= s.mesh.num_vertices())
       throw InputError(a.surface + ": cut vertex " + std::to_string(v) + " is out of range; the surface has " +
@@ -216,7 +218,9 @@ void run_one_surface(const RectangleArgs& a) {
                       {"cut_to", r.cut_path.back()},
                       {"cut_path_vertices", r.cut_path.size()},
                       {"layout", "anterior cut vertex at (0, 0.5), posterior at (2, 0.5)"},
-                      {"initial_map", a.initial_on_surface ? "harmonic map of the cut surface" : "harmonic map of the cut authalic sphere image"},
+                      {"initial_map", r.initial_used == RectangleInitial::Sphere ? "harmonic map of the cut authalic sphere image"
+                                                                                  : "harmonic map of the cut surface"},
+                      {"initial_attempts", r.attempts},
                       {"sphere_flips", r.sphere_flips},
                       {"part", part_json(r.map)}};
   finish(a, {&r.map}, {shading}, j, seconds);
@@ -288,9 +292,11 @@ void setup(CLI::App& parent) {
   sub->add_flag("--cut-surface", a->cut_surface,
                 "--surface form: also write the 3D surface cut open, on the map's vertices (<stem>.cut.surf.gii)")
       ->needs(surface);
-  sub->add_flag("--initial-on-surface", a->initial_on_surface,
-                "--surface form: compute the initial harmonic map on the cut surface itself instead of on its authalic "
-                "sphere image (the literal construction; less robust, see docs/maps.md)")
+  sub->add_option("--initial", a->initial,
+                  "--surface form: embedding of the initial harmonic map: surface (the cut surface itself), sphere (its "
+                  "authalic sphere image), auto (surface, then sphere if the flow leaves flips; see docs/maps.md)")
+      ->check(CLI::IsMember({"auto", "surface", "sphere"}))
+      ->capture_default_str()
       ->needs(surface);
   sub->add_option("--k", a->k, "Element grid: 2K x K cells")->check(CLI::Range(1, 512))->capture_default_str();
   add_common_options(*sub);

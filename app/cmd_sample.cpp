@@ -84,6 +84,7 @@ int run_sample(const SampleArgs& a) {
   so.outward = a.outward;
   so.statistic = a.stat == "max" ? analysis::SamplingStatistic::Max : analysis::SamplingStatistic::Mean;
   analysis::SamplingResult result;
+  const auto sampling_start = std::chrono::steady_clock::now();
   if (a.trilinear) {
     result = analysis::sample_at_vertices(volume, V_world, surface.mesh.F, so);
   } else if (!a.ribbon.empty()) {
@@ -94,6 +95,8 @@ int run_sample(const SampleArgs& a) {
   } else {
     result = analysis::sample_normal_projection(volume, V_world, surface.mesh.F, so);
   }
+
+  const double sampling_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sampling_start).count();
 
   // Intensity normalisation.
   analysis::Normalisation norm;
@@ -175,6 +178,7 @@ int run_sample(const SampleArgs& a) {
     j["normalisation_reference_value"] = norm.reference_value;
     j["units"] = norm.units;
     j["notes"] = result.notes;
+    j["sampling_seconds"] = sampling_seconds;
     j["seconds"] = seconds;
     std::cout << j.dump(2) << '\n';
   }

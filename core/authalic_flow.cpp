@@ -15,7 +15,6 @@
 #include "core/grid_overlap.h"
 #include "core/metrics.h"
 #include "core/poisson_dct.h"
-#include "/tmp/geom/timer.h"
 
 namespace authalic {
 
@@ -114,9 +113,7 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
   grid.rows = ny;
   grid.width = width;
   grid.height = 1.0;
-  ScopeTimer* t1 = new ScopeTimer("  raster");
   const VectorXd cells = rasterize_face_measure(UV, F, face_target, grid);
-  delete t1;
   MatrixXd rho(ny, nx);
   for (int r = 0; r < ny; ++r)
     for (int c = 0; c < nx; ++c) rho(r, c) = cells[r * nx + c] / (hx * hy);
@@ -124,15 +121,12 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
   const double mean = rho.mean();
   if (mean > 0) rho /= mean;
 
-  ScopeTimer* t2 = new ScopeTimer("  solve");
   NeumannPoissonGrid solver(nx, ny, hx, hy);
   MatrixXd rho_s, g;
   solver.smooth_and_solve(rho, smoothing_cells * std::max(hx, hy), &rho_s, &g);
   rho_s = rho_s.cwiseMax(1e-3);  // the smoothed density of a covering map is positive; guard anyway
   MatrixXd gx, gy;
   staggered_gradient(g, hx, hy, &gx, &gy);
-  delete t2;
-  ScopeTimer t3("  rk4");
   const Bilinear vx{&gx, 0.0, hx, 0.5 * hy, hy};
   const Bilinear vy{&gy, 0.5 * hx, hx, 0.0, hy};
   const Bilinear dens{&rho_s, 0.5 * hx, hx, 0.5 * hy, hy};
@@ -598,7 +592,6 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
         rep.stop_reason = "tolerance";
         break;
       }
-      ScopeTimer st("pass");
       MatrixXd moved = moser_grid_pass(target, UV, F, side_mask, w, opt.grid_resolution, opt.smoothing_cells, opt.rk4_steps);
       // The flow is a diffeomorphism, its piecewise-linear image of a triangle not quite: take the
       // pass's displacement with per-vertex flip-preventing steps (a vertex whose triangle would
@@ -657,7 +650,7 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
   // Flips on the output connectivity (the grid flow is a diffeomorphism only up to its
   // discretisation; the mesh method flows on flipped connectivity): re-place them.
   int remaining = 0;
-  { ScopeTimer st("repair"); rep.repaired = repair_flips(V, F, side_mask, w, UV, &remaining); }
+  rep.repaired = repair_flips(V, F, side_mask, w, UV, &remaining);
   if (rep.repaired > 0) cur = stats_of(UV);
 
   // Polish: Gauss-Newton steps on the per-vertex areas (area_newton_displacement) around the
@@ -669,7 +662,6 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
     for (Eigen::Index f = 0; f < F.rows(); ++f)
       for (int c = 0; c < 3; ++c) ring[F(f, c)].push_back(F(f, (c + 1) % 3));
     for (int k = 0; k < opt.polish_iterations; ++k) {
-      ScopeTimer st("polish it");
       const VectorXd e = vertex_log_ratio(target, UV, F, nv);  // ln(target / domain)
       const VectorXd dom = vertex_share(signed_face_areas_2d(UV, F).cwiseAbs(), F, nv);
       std::vector<char> free_vertex(nv, 0);

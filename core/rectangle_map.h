@@ -22,6 +22,7 @@
 // Anatomical rule of each hemisphere part (a disk: the cortex without the medial wall): the
 // boundary vertex nearest to the most anterior cortex vertex goes to the middle of the part's
 // top side; the map is seen from outside (lateral surface facing the viewer, no mirror).
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -63,11 +64,16 @@ CutSurface cut_along_path(const TriMesh& mesh, const std::vector<int>& path);
 
 // ---- the maps -----------------------------------------------------------------------------
 
+// Form (a): the embedding the initial (harmonic) map of the cut disk is computed on.
+enum class RectangleInitial { Auto, Surface, Sphere };
+std::string to_string(RectangleInitial i);
+
 struct RectangleMapOptions {
   int cut_from = -1, cut_to = -1;  // form (a): landmark vertices (-1 = inferior_medial_landmarks)
-  // Form (a): compute the initial (harmonic) map of the cut disk on the surface's authalic sphere
-  // image instead of the surface itself (see whole_brain_rectangle_map).
-  bool initial_on_sphere = true;
+  RectangleInitial initial = RectangleInitial::Auto;  // form (a), see whole_brain_rectangle_map
+  // Form (a): plain Moser passes (moser_grid_pass) before authalic_flow, for the large transport
+  // toward the slit tips (see whole_brain_rectangle_map).
+  int transport_passes = 4;
   FlowOptions flow;                // width is set by the map (2, or the hemisphere's share)
 };
 
@@ -90,14 +96,22 @@ struct RectanglePart {
 struct WholeBrainRectangle {
   RectanglePart map;
   std::vector<int> cut_path;  // input vertex indices
-  int sphere_flips = 0;       // flipped faces of the sphere image used for the initial map
+  int sphere_flips = 0;       // flipped faces of the sphere image (when it was used)
+  RectangleInitial initial_used = RectangleInitial::Surface;
+  int attempts = 1;           // 2 when Auto fell back to the sphere image
 };
 // Form (a). mesh: closed, oriented, genus-0 (InputError otherwise, with its measured topology).
-// Initial map: by default the harmonic map (arc-length boundary) of the cut disk is computed on
-// the surface's authalic sphere image (core/sphere_map.h), whose metric is free of the cortical
-// folding; the rectangle flow then restores the surface's own areas. Reason (measured on
-// fsaverage5 white_left): on the surface itself the slit tips' square-root singularity and the
-// folding distortion combined leave the flow with 270 flipped triangles; via the sphere, 0.
+// Initial map: the harmonic map (arc-length boundary) of the cut disk, computed on the surface
+// itself (Surface, the literal construction) or on its authalic sphere image (Sphere,
+// core/sphere_map.h), whose metric is free of the cortical folding; either way the flow then
+// restores the surface's own areas. Auto tries Surface and falls back to Sphere when the result
+// has flipped triangles or a mean per-face |ln area ratio| above 0.1. Measured: on fsaverage5
+// white_left the slit tips' square-root singularity plus the folding leave the flow from Surface
+// with 458 flipped triangles, from Sphere 0 (element CV 0.006); an ellipsoid works from Surface.
+// Flow: the slit tips start with almost no cortex (density ~1/300 of the mean) and need a large
+// transport, which authalic_flow's flip-limited passes freeze; `transport_passes` plain Moser
+// passes (core/authalic_flow.h moser_grid_pass) do it first, then authalic_flow repairs any
+// flipped triangle and polishes.
 WholeBrainRectangle whole_brain_rectangle_map(const TriMesh& mesh, const RectangleMapOptions& options = {},
                                               const ProgressFn& progress = {});
 

@@ -98,6 +98,10 @@ TEST(NormativeCli, BuildMergeCompare) {
   analysis::ElementTable small = table("p2", 60, [](int) { return 1.0; });
   small.grid = analysis::element_grid(analysis::ElementDomain::Square, 2);
   small.blocks[0].elements.resize(4);
+  for (auto& e : small.blocks[0].elements) {
+    e.row = e.id / 2;
+    e.col = e.id % 2;
+  }
   analysis::write_element_table(dir + "/p2_elements.csv", small);
   EXPECT_EQ(test::run_command(exe + " normative compare " + dir + "/merged.json " + dir + "/p2_elements.csv " + dir + "/cmp2", &out), 2);
   EXPECT_NE(out.find("K is 2 but the reference has 4"), std::string::npos) << out;

@@ -1,0 +1,297 @@
+// `authalic flatten SURFACE OUT.surf.gii [--faces-from FILE | --label FILE | --patch FILE]
+//  [--uv UV.surf.gii] [--metrics M.json] [--png P.png] [--density D] [--threads N]`:
+// authalic map of a cortical region onto the unit square (core/square_map.h).
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <tuple>
+
+#include "analysis/render.h"
+#include "analysis/report.h"
+#include "app/command.h"
+#include "app/map_json.h"
+#include "core/error.h"
+#include "core/metrics.h"
+#include "core/square_map.h"
+#include "core/sulcal_depth.h"
+#include "io/image_io.h"
+#include "io/surface_io.h"
+
+namespace authalic::app {
+namespace {
+
+struct FlattenArgs {
+  std::string surface, out;
+  std::string faces_from, label, patch;
+  std::string uv, metrics, png, histogram, fs_patch, initial;
+  std::string density, shading;
+  std::string method = "grid";
+  int k = 32;
+  int grid = 512;
+  int passes = 3;
+  int fixed_steps = 0;
+  int iterations = 200;
+  bool no_polish = false;
+};
+
+const char* kOrientationRule =
+    "faces oriented outward and the map orientation-preserving, so the lateral surface faces the viewer; the boundary "
+    "point nearest the most anterior (largest RAS y) region vertex is at the middle of the top side (x = 0.5, y = 1); "
+    "the boundary follows counter-clockwise by arc length; a right hemisphere is the mirror image of a left one";
+
+// The cortex region's faces on SURFACE's vertices, from whichever option was given.
+MatrixXi region_faces(const FlattenArgs& a, const io::Surface& surface, std::string* source) {
+  const TriMesh& mesh = surface.mesh;
+  const int nv = mesh.num_vertices();
+  if (!a.faces_from.empty()) {
+    const io::Surface other = io::read_surface(a.faces_from);
+    if (other.mesh.num_vertices() != nv)
+      throw InputError(a.faces_from + ": has " + std::to_string(other.mesh.num_vertices()) + " vertices but " + a.surface +
+                       " has " + std::to_string(nv) + "; --faces-from needs a surface on the same vertices");
+    *source = "faces of " + a.faces_from;
+    return other.mesh.F;
+  }
+  if (!a.label.empty()) {
+    const std::vector<int> verts = io::read_region_vertices(a.label, nv);
+    std::vector<bool> mask(nv, false);
+    for (int v : verts) mask[v] = true;
+    const Submesh sub = submesh_from_vertices(mesh, mask);
+    MatrixXi F(sub.mesh.F.rows(), 3);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) F(f, c) = sub.vertex_to_parent[sub.mesh.F(f, c)];
+    if (F.rows() == 0)
+      throw InputError(a.label + ": the label's " + std::to_string(verts.size()) +
+                       " vertices contain no whole triangle of the surface; check that the label belongs to " + a.surface);
+    *source = "faces inside label " + a.label;
+    return F;
+  }
+  if (!a.patch.empty()) {
+    const io::Patch p = io::read_freesurfer_patch(a.patch);
+    for (int v : p.vertices)
+      if (v < 0 || v >= nv)
+        throw InputError(a.patch + ": vertex " + std::to_string(v) + " is outside " + a.surface + " (" + std::to_string(nv) +
+                         " vertices); give the patch's own surface");
+    *source = "faces inside patch " + a.patch;
+    return io::patch_mesh(mesh, p).F;
+  }
+  const std::vector<std::vector<int>> loops = boundary_loops(mesh.F, nv);
+  if (loops.empty())
+    throw InputError(a.surface + ": is a closed surface; give the cortex region with --label, --patch or --faces-from, "
+                     "or use `authalic sphere` for a closed surface");
+  *source = "all faces of " + a.surface;
+  return mesh.F;
+}
+
+void write_flat(const std::string& path, const MatrixXd& XY, const MatrixXi& F, const io::SurfaceWriteOptions& base,
+                const std::string& units) {
+  io::SurfaceWriteOptions wo = base;
+  wo.metadata["authalic_units"] = units;
+  MatrixXd P = MatrixXd::Zero(XY.rows(), 3);
+  P.leftCols(2) = XY;
+  io::write_surface(path, TriMesh{P, F}, wo);
+}
+
+nlohmann::json flow_json(const FlowReport& r, const FlowOptions& o) {
+  return {{"method", to_string(r.method)},
+          {"iterations", r.iterations},
+          {"polish_iterations", r.polish_iterations},
+          {"converged", r.converged},
+          {"stop_reason", r.stop_reason},
+          {"tolerance", {{"vertex_ln_area_abs_mean", o.tolerance_mean}, {"vertex_ln_area_abs_p99", o.tolerance_p99}}},
+          {"grid_resolution", o.grid_resolution},
+          {"rk4_steps", o.rk4_steps},
+          {"fixed_steps", o.fixed_steps},
+          {"edge_flips", r.edge_flips},
+          {"repaired_vertices", r.repaired},
+          {"flips", r.flips},
+          {"vertex_ln_area_abs_mean_history", r.history_mean},
+          {"initial_vertex_ln_area_abs", {{"mean", r.initial_vertex_mean}, {"p99", r.initial_vertex_p99}}},
+          {"final_vertex_ln_area_abs", {{"mean", r.final_vertex_mean}, {"p99", r.final_vertex_p99}, {"max", r.final_vertex_max}}}};
+}
+
+void run(const FlattenArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const int given = !a.faces_from.empty() + !a.label.empty() + !a.patch.empty();
+  if (given > 1) throw InputError("flatten: give at most one of --faces-from, --label, --patch");
+  const io::Surface surface = io::read_surface(a.surface);
+  const TriMesh& mesh = surface.mesh;
+  std::string region_source;
+  const MatrixXi region = region_faces(a, surface, &region_source);
+  for (Eigen::Index f = 0; f < region.rows(); ++f)
+    for (int c = 0; c < 3; ++c)
+      if (region(f, c) < 0 || region(f, c) >= mesh.num_vertices())
+        throw InputError(region_source + ": face " + std::to_string(f) + " refers to vertex " + std::to_string(region(f, c)) +
+                         " outside " + a.surface + "; give a face set on the same vertices");
+
+  SquareMapOptions options;
+  options.flow.method = a.method == "mesh" ? FlowMethod::Mesh : FlowMethod::Grid;
+  options.flow.grid_resolution = a.grid;
+  options.flow.max_passes = a.passes;
+  options.flow.fixed_steps = a.fixed_steps;
+  options.flow.max_iterations = a.iterations;
+  options.flow.polish = !a.no_polish;
+  if (!a.density.empty()) options.density = io::read_per_vertex(a.density, mesh.num_vertices());
+
+  SquareMapResult r;
+  try {
+    r = square_map(mesh.V, region, options, terminal_progress());
+  } catch (const InputError& e) {
+    throw InputError(a.surface + " (" + region_source + "): " + e.what());
+  }
+  const double seconds_map = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // Outputs: flat surface in mm (area = cortical area), uv in [0, 1]^2, FreeSurfer patch.
+  const double scale = std::sqrt(r.surface_area / r.width);
+  io::SurfaceWriteOptions wo;
+  wo.geometric_type = "Flat";
+  const auto structure = surface.metadata.find("AnatomicalStructurePrimary");
+  if (structure != surface.metadata.end()) wo.anatomical_structure = structure->second;
+  wo.metadata = {{"authalic_map", "square (authalic, Lie advection / Moser flow)"},
+                 {"authalic_orientation", kOrientationRule},
+                 {"authalic_source", a.surface},
+                 {"authalic_region", region_source},
+                 {"authalic_input_vertices", std::to_string(r.num_input_vertices)},
+                 {"authalic_cortical_area_mm2", std::to_string(r.surface_area)}};
+  write_flat(a.out, r.UV * scale, r.F, wo,
+             "mm: the flat square's area equals the cortical area (" + std::to_string(r.surface_area) + " mm^2)");
+  if (!a.uv.empty()) write_flat(a.uv, r.UV, r.F, wo, "unit square [0,1]^2 (x right, y up)");
+  if (!a.initial.empty()) {
+    io::SurfaceWriteOptions wi = wo;
+    wi.metadata["authalic_map"] = "square (conformal initial map)";
+    write_flat(a.initial, r.UV_initial, r.F, wi, "unit square [0,1]^2 (x right, y up)");
+  }
+  if (!a.fs_patch.empty()) {
+    // FreeSurfer patches name vertices of the parent surface: the input's region vertices only.
+    std::vector<char> used(r.num_input_vertices, 0);
+    for (Eigen::Index f = 0; f < region.rows(); ++f)
+      for (int c = 0; c < 3; ++c) used[region(f, c)] = 1;
+    std::vector<int> verts;
+    for (int v = 0; v < r.num_input_vertices; ++v)
+      if (used[v]) verts.push_back(v);
+    MatrixXd P = MatrixXd::Zero(static_cast<Eigen::Index>(verts.size()), 3);
+    for (size_t k = 0; k < verts.size(); ++k) P.row(k).head<2>() = r.UV.row(verts[k]) * scale;
+    io::write_freesurfer_patch(a.fs_patch, verts, P);
+  }
+
+  const MapMetrics final_metrics = map_metrics(r.V, r.UV, r.F, MapDomain::Square, a.k);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  nlohmann::json j = {{"surface", a.surface},
+                      {"region", region_source},
+                      {"output", a.out},
+                      {"input_vertices", r.num_input_vertices},
+                      {"vertices", r.V.rows()},
+                      {"faces", r.F.rows()},
+                      {"cortical_area_mm2", r.surface_area},
+                      {"flat_scale_mm_per_unit", scale},
+                      {"orientation_rule", kOrientationRule},
+                      {"faces_reversed_to_point_outward", r.faces_reversed},
+                      {"anterior_vertex", r.anterior_vertex},
+                      {"initial_map",
+                       {{"weights", to_string(r.initial.weights)},
+                        {"cotangent_flips", r.initial.cotangent_flips},
+                        {"corner_vertices_inserted", r.initial.corner_vertices_inserted},
+                        {"corners_snapped", r.initial.corners_snapped},
+                        {"edges_split", r.initial.edges_split},
+                        {"flips", count_flipped(r.UV_initial, r.F)}}},
+                      {"flow", flow_json(r.flow, options.flow)},
+                      {"flips", r.flips},
+                      {"metrics", metrics_json(final_metrics)},
+                      {"seconds", {{"map", seconds_map}, {"total", seconds}}}};
+  if (!a.metrics.empty()) {
+    j["initial_metrics"] = metrics_json(map_metrics(r.V, r.UV_initial, r.F, MapDomain::Square, a.k));
+    write_json_file(a.metrics, j);
+  }
+
+  if (!a.png.empty()) {
+    analysis::ScalarColouring c;
+    VectorXd shade;
+    if (a.shading.empty()) {
+      shade = sulcal_depth_proxy(mesh.V, mesh.F);
+      c.label = "depth below smoothed surface (mm)";
+    } else {
+      shade = io::read_per_vertex(a.shading, mesh.num_vertices());
+      c.label = "sulcal depth / curvature";
+    }
+    c.values = extend_to_inserted(shade, r.initial).col(0);
+    c.colormap = "gray_r";
+    std::tie(c.vmin, c.vmax) = analysis::robust_range(c.values);
+    analysis::FlatRenderOptions fo;
+    fo.grid_cols = fo.grid_rows = a.k;
+    fo.title = "authalic square map, " + std::to_string(a.k) + "x" + std::to_string(a.k) + " equal-area elements";
+    io::write_png(a.png, analysis::render_flat(r.UV, r.F, c, fo));
+  }
+  if (!a.histogram.empty()) {
+    VectorXd up, la;
+    face_stretch_metrics(r.V, r.UV, r.F, &up, &la);
+    io::write_png(a.histogram, analysis::render_histograms({std::vector<double>(up.data(), up.data() + up.size()),
+                                                            std::vector<double>(la.data(), la.data() + la.size())},
+                                                           {"area distortion ln(gmax*gmin)", "angle distortion ln(gmax/gmin)"},
+                                                           60, 1000, 400));
+  }
+
+  std::ostringstream line;
+  line << "flatten: " << a.out << ": " << r.flips << " flipped faces, element CV " << final_metrics.element_cv << " ("
+       << a.k << "x" << a.k << "), per-face mean |ln area ratio| " << final_metrics.face_ln_area.mean
+       << ", per-vertex mean " << final_metrics.vertex_ln_area.mean << " (p99 " << final_metrics.vertex_ln_area.p99 << "), "
+       << r.flow.iterations << " passes + " << r.flow.polish_iterations << " polish steps, " << seconds << " s";
+  if (global_options().json) {
+    std::cout << j.dump(2) << '\n';
+  } else {
+    info(line.str());
+    if (!r.flow.converged)
+      info("flatten: note: the flow stopped (" + r.flow.stop_reason + ") before its tolerance was met");
+  }
+}
+
+void setup(CLI::App& parent) {
+  auto a = std::make_shared<FlattenArgs>();
+  CLI::App* sub = parent.add_subcommand(
+      "flatten",
+      "Area-preserving (authalic) map of a cortical region onto the unit square: arc-length boundary with the frontal "
+      "pole at the top middle, conformal interior, then Moser/Lie area-restoring flow. Lateral surface faces the viewer; "
+      "right hemispheres are mirror images of left ones.");
+  sub->add_option("SURFACE", a->surface, "Cortical surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, STL), mm, RAS")->required();
+  sub->add_option("OUT", a->out,
+                  "Output flat surface (GIFTI .surf.gii): x,y in mm, scaled so its area equals the cortical area (mm^2); "
+                  "the input's vertices first, vertices inserted by corner/ear splits appended")
+      ->required();
+  auto* g1 = sub->add_option("--faces-from", a->faces_from,
+                             "Take the region's triangles from this surface on the same vertices (e.g. FreeSurfer's flat map)");
+  auto* g2 = sub->add_option("--label", a->label, "Cortex region as vertices: FreeSurfer .label, GIFTI label or shape mask");
+  auto* g3 = sub->add_option("--patch", a->patch, "Cortex region as a FreeSurfer patch (its vertices)");
+  g1->excludes(g2)->excludes(g3);
+  g2->excludes(g3);
+  sub->add_option("--uv", a->uv, "Also write the map in unit-square coordinates [0,1]^2 (GIFTI)");
+  sub->add_option("--initial", a->initial, "Also write the conformal initial map in [0,1]^2 (GIFTI)");
+  sub->add_option("--fs-patch", a->fs_patch, "Also write a FreeSurfer flat patch (x,y in mm) of the region's input vertices");
+  sub->add_option("--metrics", a->metrics,
+                  "Write distortion metrics (JSON): flips, per-face/per-vertex |ln area ratio|, Upsilon/Lambda, element CV "
+                  "over a K x K grid (element areas in mm^2)");
+  sub->add_option("--png", a->png, "Write a PNG of the flat map shaded by sulcal depth, with the K x K element grid");
+  sub->add_option("--histogram", a->histogram, "Write a PNG histogram of the distortion metrics Upsilon and Lambda");
+  sub->add_option("--shading", a->shading,
+                  "Per-vertex sulc or curv file for the PNG (default: depth below a smoothed surface, mm)");
+  sub->add_option("--density", a->density,
+                  "Per-vertex density (GIFTI shape / FreeSurfer curv / text, > 0): a region of density 2 gets twice its "
+                  "natural share of the square");
+  sub->add_option("--k", a->k, "Element grid K (K x K elements) for metrics and PNG")->check(CLI::Range(1, 1024))->capture_default_str();
+  sub->add_option("--method", a->method, "Flow: grid (Moser flow on a DCT grid, default) or mesh (discrete Lie flow, DLF)")
+      ->check(CLI::IsMember({"grid", "mesh"}))
+      ->capture_default_str();
+  sub->add_option("--grid", a->grid, "Grid cells per side (grid method)")->check(CLI::Range(16, 4096))->capture_default_str();
+  sub->add_option("--passes", a->passes, "Maximum flow passes (grid method)")->check(CLI::Range(0, 100))->capture_default_str();
+  sub->add_option("--iterations", a->iterations, "Maximum steps (mesh method)")->check(CLI::Range(0, 100000))->capture_default_str();
+  sub->add_option("--fixed-steps", a->fixed_steps,
+                  "Mesh method with Zou's fixed schedule of K steps (eq. 19) instead of adaptive steps")
+      ->check(CLI::Range(0, 100000));
+  sub->add_flag("--no-polish", a->no_polish, "Skip the final per-vertex Gauss-Newton polish (grid method)");
+  add_common_options(*sub);
+  sub->callback([a]() { run(*a); });
+}
+
+const bool registered = register_command({20, setup});
+
+}  // namespace
+}  // namespace authalic::app

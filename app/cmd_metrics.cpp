@@ -1,0 +1,116 @@
+// `authalic metrics SURFACE MAP.surf.gii [--domain square|rectangle|sphere] [--k 32] [--json]`:
+// distortion of any map of SURFACE (core/metrics.h; the same definitions as
+// ../shared/tools/evalmap.py).
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "app/command.h"
+#include "app/map_json.h"
+#include "core/error.h"
+#include "core/metrics.h"
+#include "io/surface_io.h"
+
+namespace authalic::app {
+namespace {
+
+struct MetricsArgs {
+  std::string surface, map;
+  std::string domain = "square";
+  int k = 32;
+};
+
+void run(const MetricsArgs& a) {
+  const io::Surface surface = io::read_surface(a.surface);
+  const io::Surface map = io::read_surface(a.map);
+  const int nv = surface.mesh.num_vertices();
+  const MapDomain domain = a.domain == "sphere" ? MapDomain::Sphere : a.domain == "rectangle" ? MapDomain::Rectangle
+                                                                                                : MapDomain::Square;
+  if (map.mesh.num_vertices() < nv)
+    throw InputError(a.map + ": has " + std::to_string(map.mesh.num_vertices()) + " vertices, fewer than the " +
+                     std::to_string(nv) + " of " + a.surface + "; give a map on the surface's vertex indexing");
+  // The map's own triangles (e.g. a cortex patch); faces on vertices the map inserted (corner and
+  // ear splits, beyond the surface's vertices) have no 3D position here and are left out, as
+  // evalmap.py does.
+  const MatrixXi& Fm = map.mesh.F.rows() > 0 ? map.mesh.F : surface.mesh.F;
+  std::vector<int> keep;
+  for (Eigen::Index f = 0; f < Fm.rows(); ++f)
+    if (Fm(f, 0) < nv && Fm(f, 1) < nv && Fm(f, 2) < nv) keep.push_back(static_cast<int>(f));
+  const int excluded = static_cast<int>(Fm.rows()) - static_cast<int>(keep.size());
+  if (keep.empty()) throw InputError(a.map + ": no triangle of the map lies on the surface's vertices; check the file pair");
+  MatrixXi F(static_cast<Eigen::Index>(keep.size()), 3);
+  for (size_t k = 0; k < keep.size(); ++k) F.row(k) = Fm.row(keep[k]);
+  MatrixXd U = map.mesh.V.topRows(nv);
+
+  // Planar maps written in mm (e.g. flatten's OUT) are brought to their domain by one uniform
+  // scale and shift of the used vertices' bounding box (ratios do not depend on it; the element
+  // grid does).
+  bool rescaled = false;
+  if (domain != MapDomain::Sphere) {
+    const double W = domain == MapDomain::Rectangle ? 2.0 : 1.0;
+    std::vector<char> used(nv, 0);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) used[F(f, c)] = 1;
+    double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+    for (int v = 0; v < nv; ++v)
+      if (used[v]) x0 = std::min(x0, U(v, 0)), x1 = std::max(x1, U(v, 0)), y0 = std::min(y0, U(v, 1)), y1 = std::max(y1, U(v, 1));
+    const double tol = 1e-6;
+    if (x0 < -tol || y0 < -tol || x1 > W + tol || y1 > 1 + tol || (x1 - x0) < 0.5 * W || (y1 - y0) < 0.5) {
+      const double s = 1.0 / std::max(y1 - y0, 1e-300);
+      U.col(0) = (U.col(0).array() - x0) * s;
+      U.col(1) = (U.col(1).array() - y0) * s;
+      rescaled = true;
+    }
+  }
+  const MapMetrics m = map_metrics(surface.mesh.V, U, F, domain, a.k);
+  nlohmann::json j = metrics_json(m);
+  j["surface"] = a.surface;
+  j["map"] = a.map;
+  j["faces_on_inserted_vertices"] = excluded;
+  j["rescaled_to_domain"] = rescaled;
+  j["mirrored"] = m.mirrored;
+  if (global_options().json) {
+    std::cout << j.dump(2) << '\n';
+    return;
+  }
+  std::ostringstream s;
+  s << std::setprecision(4);
+  s << "faces " << m.faces << " (" << excluded << " on inserted vertices left out), vertices " << m.vertices << "\n"
+    << "flipped faces " << m.flips << (m.mirrored ? " (map was mirrored as a whole; measured un-mirrored)" : "") << "\n"
+    << "|ln area ratio| per face: mean " << m.face_ln_area.mean << ", p95 " << m.face_ln_area.p95 << ", p99 "
+    << m.face_ln_area.p99 << ", max " << m.face_ln_area.max << "\n"
+    << "|ln area ratio| per vertex: mean " << m.vertex_ln_area.mean << ", p95 " << m.vertex_ln_area.p95 << ", p99 "
+    << m.vertex_ln_area.p99 << ", max " << m.vertex_ln_area.max << "\n"
+    << "Upsilon mean " << m.upsilon_mean << ", Lambda mean " << m.lambda.mean << ", p95 " << m.lambda.p95 << "\n"
+    << "element-area CV (" << m.element_cols << "x" << m.element_rows << ") " << m.element_cv << ", min/mean "
+    << m.element_min << ", max/mean " << m.element_max << ", mean " << m.element_mean_mm2 << " mm^2"
+    << (rescaled ? " (map rescaled to its domain)" : "") << "\n";
+  std::cout << s.str();
+}
+
+void setup(CLI::App& parent) {
+  auto a = std::make_shared<MetricsArgs>();
+  CLI::App* sub = parent.add_subcommand(
+      "metrics",
+      "Distortion of a map of a surface: flipped faces, per-face and per-vertex |ln area ratio|, Upsilon and Lambda "
+      "(Zou et al. eq. 23), and the coefficient of variation of the cortical area (mm^2) per element of a K x K grid.");
+  sub->add_option("SURFACE", a->surface, "The 3D surface (mm)")->required();
+  sub->add_option("MAP", a->map, "The map on the same vertex indexing (GIFTI or any surface format); its triangles are used")
+      ->required();
+  sub->add_option("--domain", a->domain, "Map domain: square [0,1]^2, rectangle [0,2]x[0,1], or sphere")
+      ->check(CLI::IsMember({"square", "rectangle", "sphere"}))
+      ->capture_default_str();
+  sub->add_option("--k", a->k, "Element grid K: K x K (square), 2K x K (rectangle, sphere)")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
+  add_common_options(*sub);
+  sub->callback([a]() { run(*a); });
+}
+
+const bool registered = register_command({25, setup});
+
+}  // namespace
+}  // namespace authalic::app
