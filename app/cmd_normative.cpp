@@ -86,6 +86,7 @@ int run_merge(const MergeArgs& a) {
 }
 
 int run_compare(const CompareArgs& a) {
+  const auto start = std::chrono::steady_clock::now();
   const analysis::NormativeReference ref = analysis::read_reference(a.reference);
   const analysis::ElementTable patient = analysis::read_element_table(a.patient);
   analysis::CompareOptions o;
@@ -120,8 +121,11 @@ int run_compare(const CompareArgs& a) {
   info("authalic normative compare: " + std::to_string(cmp.num_compared) + " elements compared, " + std::to_string(cmp.num_hypo) +
        " hypo and " + std::to_string(cmp.num_hyper) + " hyper at |z| >= " + std::to_string(cmp.threshold) + ", " +
        std::to_string(cmp.clusters.size()) + " cluster(s); wrote " + paths.summary_json);
-  if (global_options().json)
-    std::cout << analysis::comparison_summary_json(ref, a.reference, patient, a.patient, cmp, paths);
+  if (global_options().json) {
+    auto j = nlohmann::json::parse(analysis::comparison_summary_json(ref, a.reference, patient, a.patient, cmp, paths));
+    j["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::cout << j.dump(2) << '\n';
+  }
   return 0;
 }
 

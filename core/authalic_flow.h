@@ -46,7 +46,7 @@ struct FlowOptions {
 
   // Stopping rule (both methods): per-vertex |ln area ratio| mean <= tolerance_mean and 99th
   // percentile <= tolerance_p99; or no further improvement; or the iteration budget is spent.
-  double tolerance_mean = 0.004;
+  double tolerance_mean = 0.006;
   double tolerance_p99 = 0.02;
 
   // Grid method.
@@ -104,8 +104,9 @@ VectorXd target_face_measure(const MatrixXd& V, const MatrixXi& F, const VectorX
 VectorXd vertex_log_ratio(const VectorXd& face_target, const MatrixXd& UV, const MatrixXi& F, int num_vertices);
 
 // One Moser pass on the grid: rasterise, smooth, solve, advect (RK4). Returns the moved UV.
+// fraction < 1: a partial pass that removes only that fraction of ln(density).
 MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const MatrixXi& F, const VectorXi& side_mask,
-                         double width, int resolution, double smoothing_cells, int rk4_steps);
+                         double width, int resolution, double smoothing_cells, int rk4_steps, double fraction = 1.0);
 
 // Largest λ > 0 such that moving the triangle's vertices p_i + s d_i keeps it positively oriented
 // for all s in [0, λ) (DLF section 5.4: the smallest positive root of the quadratic signed area);

@@ -2,6 +2,7 @@
 // splits, harmonic (cotangent = LSCM with fixed boundary) interior with fallbacks. See
 // core/conformal_map.h; seed 000 (Zou et al. 2011) section 4.1.
 #include "core/conformal_map.h"
+#include "core/sparse_cholesky.h"
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
@@ -154,8 +155,8 @@ MatrixXd solve_harmonic(const MatrixXd& V, const MatrixXi& F, const std::vector<
   if (weights == HarmonicWeights::Cotangent) {
     // The cotangent matrix is the P1 stiffness matrix: positive definite with a Dirichlet
     // boundary whatever the triangle shapes, so a Cholesky factorisation applies.
-    Eigen::SimplicialLDLT<SparseMatrix> solver(A);
-    if (solver.info() != Eigen::Success) throw std::runtime_error("harmonic_map: cotangent factorisation failed");
+    const SpdSolver solver(A);
+    if (!solver.ok()) throw std::runtime_error("harmonic_map: cotangent factorisation failed");
     x = solver.solve(rhs);
   } else {
     Eigen::SparseLU<SparseMatrix> solver;
@@ -266,13 +267,13 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
     int i = static_cast<int>(std::upper_bound(s.begin(), s.end(), cu) - s.begin()) - 1;
     i = std::clamp(i, 0, nb - 1);
     const double len = s[i + 1] - s[i];
-    const double prev_len = s[i] - s[(i + nb - 1) % nb] + (i == 0 ? P : 0.0);
-    const double next_len = s[(i + 2 <= nb ? i + 2 : 1)] - s[i + 1] + (i + 2 > nb ? P : 0.0);
     const double d0 = cu - s[i], d1 = s[i + 1] - cu;
     const int j = (i + 1) % nb;
-    if (d0 <= opt.corner_snap * std::min(len, prev_len) && corner_of[i] < 0) {
+    // Snap the nearer endpoint onto the corner when it is within corner_snap of the edge length
+    // (and not already a corner); otherwise split the edge at the corner.
+    if (d0 <= d1 && d0 <= opt.corner_snap * len && corner_of[i] < 0) {
       corner_of[i] = c;
-    } else if (d1 <= opt.corner_snap * std::min(len, next_len) && corner_of[j] < 0) {
+    } else if (d1 < d0 && d1 <= opt.corner_snap * len && corner_of[j] < 0) {
       corner_of[j] = c;
     } else {
       inserted[i].push_back({cu, c});

@@ -50,9 +50,13 @@ struct RectangleBoundaryMap {
   // point goes to anchor_position (overrides anchor_vertex).
   bool use_anchor_point = false;
   Eigen::Vector3d anchor_point = Eigen::Vector3d::Zero();
-  // A boundary vertex closer to a corner than this fraction of its shorter incident boundary
-  // edge is moved onto the corner instead of inserting a near-duplicate vertex there.
-  double corner_snap = 0.05;
+  // When the nearer endpoint of the boundary edge spanning a corner is within this fraction of
+  // the edge's length from the corner, that vertex is moved onto the corner (its arc-length
+  // position shifts by at most half an edge) instead of splitting the edge there. 0.5 (default)
+  // always snaps, so no triangle is split at a corner: faces on inserted vertices have no 3D
+  // counterpart in the input surface and drop out of independent checks (evalmap.py); 0 always
+  // splits (Zou et al. 2011, section 4.1).
+  double corner_snap = 0.5;
   // After the arc-length map, let the boundary vertices slide along their sides (corners and the
   // anchor fixed) and take the least-squares conformal map on that constraint set, if it has no
   // flipped triangle. Removes the non-conformal boundary layer that arc-length spacing imposes.

@@ -212,9 +212,7 @@ MatrixXd lift_inserted_vertices(const ConformalMapResult& cm, const MatrixXd& V3
   // Only input edges qualify: the other diagonal of a split quad can pass through the same point.
   std::vector<std::vector<int>> input_adj = vertex_neighbours(F_input, n0);
   auto is_input_edge = [&](int a, int b) { return std::binary_search(input_adj[a].begin(), input_adj[a].end(), b); };
-  std::vector<std::vector<int>> adj(static_cast<std::size_t>(nv));
-  for (Eigen::Index f = 0; f < cm.F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) adj[cm.F(f, c)].push_back(cm.F(f, (c + 1) % 3));
+  const std::vector<std::vector<int>> adj = vertex_neighbours(cm.F, nv);
   for (Eigen::Index v = n0; v < nv; ++v) {
     double best = std::numeric_limits<double>::infinity();
     Eigen::RowVector3d pos = cm.V.row(v).head<3>();

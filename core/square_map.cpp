@@ -1,6 +1,8 @@
 // Region -> authalic square map, with the anatomical orientation rule (see core/square_map.h).
 #include "core/square_map.h"
 
+#include <chrono>
+
 #include <cmath>
 #include <sstream>
 
@@ -91,13 +93,17 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
     b.anchor_position = rectangle_top_middle(opt.width);
   }
   report(progress, "initial", -1, "conformal map");
+  const auto t0 = std::chrono::steady_clock::now();
   ConformalMapResult init = conformal_rectangle_map(V, F, b);
+  const auto t1 = std::chrono::steady_clock::now();
   R.surface_area = face_areas(init.V, init.F).sum();
 
   FlowOptions fo = opt.flow;
   fo.width = opt.width;
   if (opt.density.size() > 0) fo.density = extend_to_inserted(opt.density, init).col(0);
   FlowResult flow = authalic_flow(init.V, init.F, init.UV, init.side_mask, fo, progress);
+  R.seconds_initial = std::chrono::duration<double>(t1 - t0).count();
+  R.seconds_flow = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
 
   R.V = std::move(init.V);
   R.F = std::move(init.F);

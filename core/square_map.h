@@ -52,6 +52,8 @@ struct SquareMapResult {
   ConformalMapResult initial;  // split counts, weights used (V/F/UV moved into the fields above)
   FlowReport flow;
   int flips = 0;             // flipped or degenerate faces of UV (0 unless something failed)
+  double seconds_initial = 0;  // wall time of the conformal initial map
+  double seconds_flow = 0;     // wall time of the flow (passes, repair, polish)
 };
 
 // Empty when (V, F) is one disk; otherwise a one-line description of the measured topology and

@@ -1,0 +1,110 @@
+#!/usr/bin/env bash
+# Issue 3 benchmark: the authalic square map on fsaverage5, printed as a table.
+#   bench/bench_flatten.sh [BUILD_DIR]     (default: build; needs ../shared/data)
+# Inputs: B1 = white_left with the cortex face set of flat_left (9,465 region vertices),
+#         B2 = the same on pial_left, B3 = B1 subdivided twice (midpoint; B1's vertices first).
+# Beside them: the DLF mesh flow (adaptive flip-preventing step) on B1, the conformal initial maps,
+# and FreeSurfer's own flat map. Every map is also measured by ../shared/tools/evalmap.py
+# (independent, nibabel), which skips faces on inserted (ear-split) vertices and counts element
+# areas by Monte Carlo (4M samples): its CV has a sampling floor of about 0.007 of its own.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${1:-build}
+bin="$PWD/$build/authalic"
+data=../shared/data/fsaverage5
+evalmap=../shared/tools/evalmap.py
+py=/usr/bin/python3
+[ -x "$bin" ] || { echo "bench_flatten: $bin not found; build first (scripts/build.sh)" >&2; exit 2; }
+[ -f "$data/white_left.gii.gz" ] || { echo "bench_flatten: $data not found (../shared/data is needed)" >&2; exit 2; }
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+"$bin" subdivide "$data/white_left.gii.gz" "$work/b3.surf.gii" --times 2 --faces-from "$data/flat_left.gii.gz" -q
+
+# run NAME SURFACE3D ARGS... : flatten with /usr/bin/time; leaves $work/NAME.{json,uv.surf.gii,time}
+run() {
+  local name=$1 surf=$2
+  shift 2
+  /usr/bin/time -v "$bin" flatten "$surf" "$work/$name.surf.gii" --uv "$work/$name.uv.surf.gii" \
+    --initial "$work/$name.init.surf.gii" --metrics "$work/$name.json" -q "$@" 2>"$work/$name.time"
+}
+wall() { awk -F': ' '/Elapsed \(wall clock\)/{print $2}' "$work/$1.time" | awk -F: '{ if (NF==3) print $1*3600+$2*60+$3; else print $1*60+$2 }'; }
+rss() { awk -F': ' '/Maximum resident set size/{printf "%.0f", $2/1024}' "$work/$1.time"; }
+
+run B1 "$data/white_left.gii.gz" --faces-from "$data/flat_left.gii.gz"
+run B2 "$data/pial_left.gii.gz" --faces-from "$data/flat_left.gii.gz"
+run B3 "$work/b3.surf.gii"
+run B1-mesh "$data/white_left.gii.gz" --faces-from "$data/flat_left.gii.gz" --method mesh
+# Determinism: 1 and 2 threads give byte-identical maps.
+"$bin" flatten "$data/white_left.gii.gz" "$work/t1.surf.gii" --faces-from "$data/flat_left.gii.gz" --threads 1 -q
+"$bin" flatten "$data/white_left.gii.gz" "$work/t2.surf.gii" --faces-from "$data/flat_left.gii.gz" --threads 2 -q
+if cmp -s "$work/t1.surf.gii" "$work/t2.surf.gii"; then same=identical; else same=DIFFERENT; fi
+# FreeSurfer's flat map, measured the same way (x,y in mm: metrics rescale it to the unit square).
+"$bin" metrics "$data/white_left.gii.gz" "$data/flat_left.gii.gz" --json > "$work/fs.json"
+
+for n in B1 B2 B3 B1-mesh; do
+  surf="$data/white_left.gii.gz"; [ $n = B2 ] && surf="$data/pial_left.gii.gz"; [ $n = B3 ] && surf="$work/b3.surf.gii"
+  $py "$evalmap" "$surf" "$work/$n.uv.surf.gii" --domain square --k 32 --json > "$work/$n.eval.json"
+done
+$py "$evalmap" "$data/white_left.gii.gz" "$work/B1.init.surf.gii" --domain square --k 32 --json > "$work/B1-conformal.eval.json"
+
+WALL_B1=$(wall B1) WALL_B2=$(wall B2) WALL_B3=$(wall B3) WALL_MESH=$(wall B1-mesh) \
+RSS_B1=$(rss B1) RSS_B2=$(rss B2) RSS_B3=$(rss B3) RSS_MESH=$(rss B1-mesh) SAME=$same WORK=$work \
+$py - <<'EOF'
+import json, os, numpy as np, nibabel as nib
+w = os.environ['WORK']
+J = lambda n: json.load(open(f'{w}/{n}'))
+def uv(n):
+    return np.asarray([a.data for a in nib.load(f'{w}/{n}.uv.surf.gii').darrays if a.intent == 1008][0], float)[:, :2]
+rows = []
+def row(name, m, wall, rss, iters, ev):
+    f, v = m['face_ln_area_abs'], m.get('vertex_ln_area_abs', {})
+    rows.append((name, wall, rss, iters, m['flips'], f['mean'], f['p95'], v.get('mean', float('nan')), v.get('p99', float('nan')),
+                 v.get('max', float('nan')), m['element_cv'], m['lambda']['mean'],
+                 ev.get('element_area_cv', float('nan')) if ev else float('nan'), ev['ln_area_ratio_abs_mean'] if ev else float('nan')))
+res = {}
+for n, key in [('B1', 'B1'), ('B2', 'B2'), ('B3', 'B3'), ('B1-mesh', 'MESH')]:
+    j = J(f'{n}.json'); fl = j['flow']
+    res[n] = j
+    row(f'{n} authalic' if n != 'B1-mesh' else 'B1 DLF mesh flow', j['metrics'], os.environ['WALL_' + key], os.environ['RSS_' + key],
+        f"{fl['iterations']}+{fl['polish_iterations']}", J(f'{n}.eval.json'))
+for n in ['B1', 'B2', 'B3']:
+    row(f'{n} conformal (initial)', J(f'{n}.json')['initial_metrics'], '-', '-', '-', J('B1-conformal.eval.json') if n == 'B1' else None)
+row('FreeSurfer flat_left', J('fs.json'), '-', '-', '-', None)
+hdr = ('map', 'wall s', 'RSS MB', 'iter', 'flips', 'face mean', 'face p95', 'vert mean', 'vert p99', 'vert max', 'CV 32x32', 'mean Λ', 'evalmap CV', 'evalmap face')
+print('| ' + ' | '.join(hdr) + ' |')
+print('|' + '|'.join(['---'] * len(hdr)) + '|')
+for r in rows:
+    print('| ' + ' | '.join(x if isinstance(x, str) else (str(x) if isinstance(x, int) else f'{x:.4f}') for x in r) + ' |')
+# Resolution independence: B1's vertices mapped on B1 and on B3 (their first vertices).
+u1, u3 = uv('B1'), uv('B3')
+used = np.unique(np.asarray([a.data for a in nib.load(f'{w}/B1.uv.surf.gii').darrays if a.intent == 1009][0]))
+used = used[used < 10242]
+d = np.linalg.norm(u1[used] - u3[used], axis=1)
+print()
+print(f'resolution independence (B1 vs B3 on B1\'s {len(used)} region vertices): mean |Δuv| = {d.mean():.4f}, max {d.max():.4f}')
+print(f'threads: 1 vs 2 threads give {os.environ["SAME"]} outputs; seconds (initial map / flow) B1 {res["B1"]["seconds"]["initial_map"]:.2f}/{res["B1"]["seconds"]["flow"]:.2f},'
+      f' B3 {res["B3"]["seconds"]["initial_map"]:.2f}/{res["B3"]["seconds"]["flow"]:.2f}')
+print(f'load average at the end: {open("/proc/loadavg").read().split()[0:3]} on {os.cpu_count()} cores (other work makes every time larger)')
+print()
+ok = True
+def req(name, val, lim):
+    global ok
+    good = val <= lim
+    ok &= good
+    print(f'  {"PASS" if good else "FAIL"}  {name}: {val:.4g} (<= {lim})')
+print('requirements (issue 3):')
+for n in ['B1', 'B2', 'B3']:
+    m = res[n]['metrics']
+    req(f'{n} flips', m['flips'], 0)
+    req(f'{n} element CV', m['element_cv'], 0.01)
+    req(f'{n} per-vertex mean', m['vertex_ln_area_abs']['mean'], 0.01)
+    req(f'{n} per-vertex p99', m['vertex_ln_area_abs']['p99'], 0.04)
+    req(f'{n} per-face mean', m['face_ln_area_abs']['mean'], 0.08 if n == 'B2' else 0.06)
+req('B1 wall s', float(os.environ['WALL_B1']), 1.0)
+req('B2 wall s', float(os.environ['WALL_B2']), 1.0)
+req('B3 wall s', float(os.environ['WALL_B3']), 10.0)
+req('B3 peak MB', float(os.environ['RSS_B3']), 1536)
+req('resolution independence', d.mean(), 0.01)
+print(f'  {"PASS" if os.environ["SAME"] == "identical" else "FAIL"}  1 vs 2 threads: {os.environ["SAME"]}')
+EOF

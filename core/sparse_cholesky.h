@@ -1,0 +1,30 @@
+#pragma once
+// Sparse symmetric positive definite solves for the map cores: CHOLMOD's supernodal Cholesky with
+// nested-dissection (METIS) ordering, falling back to Eigen's simplicial LDLᵀ when CHOLMOD reports
+// the matrix is not positive definite (e.g. a nearly singular Neumann system). Results do not
+// depend on the OpenMP thread count (Debian's reference BLAS is serial).
+#include <memory>
+
+#include "core/mesh.h"
+
+namespace authalic {
+
+class SpdSolver {
+ public:
+  SpdSolver();
+  explicit SpdSolver(const SparseMatrix& A);  // factorises A (only its lower triangle is read)
+  ~SpdSolver();
+  SpdSolver(SpdSolver&&) noexcept;
+  SpdSolver& operator=(SpdSolver&&) noexcept;
+
+  // Factorises A; false if neither CHOLMOD nor the fallback succeeds.
+  bool compute(const SparseMatrix& A);
+  bool ok() const;
+  MatrixXd solve(const MatrixXd& B) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace authalic

@@ -1,0 +1,231 @@
+// `authalic sphere` and `authalic rectangle` on fsaverage5 (issue 4 requirements), their outputs,
+// determinism and errors; cross-checked with ../shared/tools/evalmap.py when python3 is there.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "common/test_data.h"
+#include "core/mesh.h"
+#include "io/image_io.h"
+#include "io/surface_io.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using authalic::MatrixXd;
+using authalic::MatrixXi;
+using authalic::test::authalic_binary;
+using authalic::test::run_command;
+
+nlohmann::json read_json(const std::string& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+// Total |signed area| of a planar map (x, y of a surface).
+double covered_area(const MatrixXd& V, const MatrixXi& F) {
+  return authalic::signed_face_areas_2d(V, F).cwiseAbs().sum();
+}
+
+bool have_evalmap() {
+  return fs::exists("/usr/bin/python3") && !authalic::test::shared_data("../tools/evalmap.py").empty() &&
+         run_command("/usr/bin/python3 -c 'import nibabel, numpy'") == 0;
+}
+
+}  // namespace
+
+TEST(SphereCli, WhiteLeftMeetsTheIssueRequirements) {
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  const std::string dir = authalic::test::temp_dir("sphere_cli");
+  const std::string out = dir + "/lh.sphere.surf.gii", metrics = dir + "/m.json", png = dir + "/s.png";
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " sphere " + white + " " + out + " --metrics " + metrics + " --png " + png +
+                            " --conformal " + dir + "/conformal.surf.gii --area-radius -q",
+                        &output),
+            0)
+      << output;
+  const auto j = read_json(metrics);
+  // Issue 4: 0 flips, element CV <= 0.01 (64 x 32), per-face mean |ln area ratio| <= 0.06.
+  EXPECT_EQ(j.at("flips"), 0);
+  const auto& m = j.at("metrics");
+  EXPECT_EQ(m.at("flips"), 0);
+  EXPECT_EQ(m.at("element_grid"), nlohmann::json({64, 32}));
+  EXPECT_LE(m.at("element_cv").get<double>(), 0.01);
+  EXPECT_LE(m.at("face_ln_area_abs").at("mean").get<double>(), 0.06);
+  // The flow did the work: the conformal start is far from equal-area (measured CV ~0.87).
+  EXPECT_GT(j.at("conformal_metrics").at("element_cv").get<double>(), 0.5);
+  EXPECT_EQ(j.at("conformal_flips"), 0);
+
+  // Output: same vertices and triangles, on a sphere whose area is the cortex's.
+  const auto surface = authalic::io::read_surface(white);
+  const auto sphere = authalic::io::read_surface(out);
+  ASSERT_EQ(sphere.mesh.num_vertices(), surface.mesh.num_vertices());
+  EXPECT_TRUE(sphere.mesh.F == surface.mesh.F);
+  const double area = authalic::face_areas(surface.mesh.V, surface.mesh.F).sum();
+  const double radius = std::sqrt(area / (4 * M_PI));
+  EXPECT_NEAR(j.at("radius_mm").get<double>(), radius, 1e-9 * radius);
+  for (int v = 0; v < sphere.mesh.num_vertices(); ++v) ASSERT_NEAR(sphere.mesh.V.row(v).norm(), radius, 1e-5 * radius);
+
+  // Orientation rule (+x right, +y anterior, +z superior): the most superior, anterior and
+  // medial (max x on a left hemisphere) points of the cortex land on those sides of the sphere.
+  Eigen::Index top, front, medial, bottom;
+  surface.mesh.V.col(2).maxCoeff(&top);
+  surface.mesh.V.col(2).minCoeff(&bottom);
+  surface.mesh.V.col(1).maxCoeff(&front);
+  surface.mesh.V.col(0).maxCoeff(&medial);
+  EXPECT_GT(sphere.mesh.V(top, 2), 0.5 * radius);
+  EXPECT_LT(sphere.mesh.V(bottom, 2), -0.5 * radius);
+  EXPECT_GT(sphere.mesh.V(front, 1), 0.5 * radius);
+  EXPECT_GT(sphere.mesh.V(medial, 0), 0.5 * radius);
+  // ... and within ~15 degrees of FreeSurfer's own sphere on average (measured 13 degrees).
+  const std::string fs_sphere_path = authalic::test::shared_data("fsaverage5/sphere_left.gii.gz");
+  if (!fs_sphere_path.empty()) {
+    const auto fs_sphere = authalic::io::read_surface(fs_sphere_path);
+    double sum = 0;
+    for (int v = 0; v < sphere.mesh.num_vertices(); ++v) {
+      const Eigen::Vector3d a = sphere.mesh.V.row(v).normalized(), b = fs_sphere.mesh.V.row(v).normalized();
+      sum += std::atan2(a.cross(b).norm(), a.dot(b));
+    }
+    EXPECT_LT(sum / sphere.mesh.num_vertices(), 20.0 * M_PI / 180.0);
+  }
+
+  const auto picture = authalic::io::read_png(png);
+  EXPECT_GT(picture.width, 400);
+  EXPECT_GT(picture.height, 200);
+
+  if (have_evalmap()) {
+    // Independent check (Monte Carlo element areas: its CV has a sampling floor of ~0.011 here;
+    // FreeSurfer's sphere measured against itself gives 0.0107).
+    ASSERT_EQ(run_command("/usr/bin/python3 " + authalic::test::shared_data("../tools/evalmap.py") + " " + white + " " + out +
+                              " --domain sphere --json 2>/dev/null",
+                          &output),
+              0)
+        << output;
+    const auto e = nlohmann::json::parse(output);
+    EXPECT_EQ(e.at("flips"), 0);
+    EXPECT_LE(e.at("element_area_cv").get<double>(), 0.02);
+    EXPECT_NEAR(e.at("ln_area_ratio_abs_mean").get<double>(), m.at("face_ln_area_abs").at("mean").get<double>(), 1e-3);
+  }
+}
+
+TEST(SphereCli, PialMeetsTheIssueRequirementsAndIsThreadDeterministic) {
+  AUTHALIC_REQUIRE_SHARED(pial, "fsaverage5/pial_left.gii.gz");
+  const std::string dir = authalic::test::temp_dir("sphere_cli_pial");
+  std::string output;
+  for (int threads : {1, 2}) {
+    const std::string t = std::to_string(threads);
+    ASSERT_EQ(run_command(authalic_binary() + " sphere " + pial + " " + dir + "/s" + t + ".surf.gii --metrics " + dir + "/m" + t +
+                              ".json --threads " + t + " -q",
+                          &output),
+              0)
+        << output;
+  }
+  const auto j = read_json(dir + "/m1.json");
+  EXPECT_EQ(j.at("metrics").at("flips"), 0);
+  EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.01);
+  EXPECT_LE(j.at("metrics").at("face_ln_area_abs").at("mean").get<double>(), 0.08);
+  const auto a = authalic::io::read_surface(dir + "/s1.surf.gii"), b = authalic::io::read_surface(dir + "/s2.surf.gii");
+  EXPECT_TRUE(a.mesh.V == b.mesh.V) << "1 and 2 threads differ by " << (a.mesh.V - b.mesh.V).cwiseAbs().maxCoeff();
+}
+
+TEST(SphereCli, RefusesSurfacesThatAreNotClosedGenusZero) {
+  AUTHALIC_REQUIRE_SHARED(flat, "fsaverage5/flat_left.gii.gz");
+  const std::string dir = authalic::test::temp_dir("sphere_cli_bad");
+  std::string output;
+  // flat_left's faces form a disk: one boundary loop.
+  EXPECT_EQ(run_command(authalic_binary() + " sphere " + flat + " " + dir + "/x.surf.gii", &output), 2) << output;
+  EXPECT_NE(output.find(flat), std::string::npos) << output;
+  EXPECT_NE(output.find("1 boundary loop"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists(dir + "/x.surf.gii"));
+  EXPECT_EQ(run_command(authalic_binary() + " sphere /nonexistent.gii " + dir + "/x.surf.gii", &output), 2) << output;
+  EXPECT_EQ(run_command(authalic_binary() + " sphere " + flat + " " + dir + "/x.surf.gii --radius -1", &output), 2) << output;
+}
+
+TEST(RectangleCli, TwoHemispheresFillTheRectangleMirrorSymmetric) {
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(flat, "fsaverage5/flat_left.gii.gz");
+  // B1 and its mirror image (x negated, triangles reversed) as the right hemisphere.
+  const std::string dir = authalic::test::temp_dir("rectangle_cli_two");
+  const auto lh = authalic::io::read_surface(white), faces = authalic::io::read_surface(flat);
+  authalic::TriMesh rh = lh.mesh, rh_faces = faces.mesh;
+  rh.V.col(0) = -rh.V.col(0);
+  rh.F.col(1).swap(rh.F.col(2));
+  rh_faces.V.col(0) = -rh_faces.V.col(0);
+  rh_faces.F.col(1).swap(rh_faces.F.col(2));
+  authalic::io::write_surface(dir + "/rh.white.surf.gii", rh);
+  authalic::io::write_surface(dir + "/rh.faces.surf.gii", rh_faces);
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " rectangle " + dir + "/brain --lh " + white + " --lh-faces-from " + flat + " --rh " +
+                            dir + "/rh.white.surf.gii --rh-faces-from " + dir + "/rh.faces.surf.gii --metrics " + dir +
+                            "/m.json --png " + dir + "/r.png -q",
+                        &output),
+            0)
+      << output;
+  const auto j = read_json(dir + "/m.json");
+  EXPECT_EQ(j.at("metrics").at("flips"), 0);
+  EXPECT_EQ(j.at("metrics").at("element_grid"), nlohmann::json({64, 32}));
+  EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.01);
+  EXPECT_NEAR(j.at("split_x").get<double>(), 1.0, 1e-9);  // equal areas
+  EXPECT_EQ(j.at("extent"), nlohmann::json({0.0, 0.0, 2.0, 1.0}));
+  const auto l = authalic::io::read_surface(dir + "/brain.lh.surf.gii"), r = authalic::io::read_surface(dir + "/brain.rh.surf.gii");
+  // 2:1 and fully covered: each part is its unit square, covered once.
+  EXPECT_NEAR(covered_area(l.mesh.V, l.mesh.F), 1.0, 1e-4);
+  EXPECT_NEAR(covered_area(r.mesh.V, r.mesh.F), 1.0, 1e-4);
+  EXPECT_NEAR(l.mesh.V.col(0).maxCoeff(), 1.0, 1e-6);
+  EXPECT_NEAR(r.mesh.V.col(0).minCoeff(), 1.0, 1e-6);
+  // Mirror symmetry: the right part is the left one reflected about x = 1.
+  ASSERT_EQ(l.mesh.num_vertices(), r.mesh.num_vertices());
+  for (int v = 0; v < l.mesh.num_vertices(); ++v) {
+    ASSERT_NEAR(r.mesh.V(v, 0), 2.0 - l.mesh.V(v, 0), 1e-5);
+    ASSERT_NEAR(r.mesh.V(v, 1), l.mesh.V(v, 1), 1e-5);
+  }
+  EXPECT_GT(authalic::io::read_png(dir + "/r.png").width, 500);
+}
+
+TEST(RectangleCli, OneClosedSurfaceCutOpenFillsTheRectangle) {
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  const std::string dir = authalic::test::temp_dir("rectangle_cli_one");
+  const std::string out = dir + "/whole.surf.gii";
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " rectangle " + out + " --surface " + white + " --metrics " + dir +
+                            "/m.json --cut-surface --flat -q",
+                        &output),
+            0)
+      << output;
+  const auto j = read_json(dir + "/m.json");
+  EXPECT_EQ(j.at("metrics").at("flips"), 0);
+  EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.01);
+  EXPECT_EQ(j.at("extent"), nlohmann::json({0.0, 0.0, 2.0, 1.0}));
+  const auto map = authalic::io::read_surface(out);
+  EXPECT_NEAR(covered_area(map.mesh.V, map.mesh.F), 2.0, 1e-4);
+  // The cut surface is on the map's vertices and keeps the cortex's area; the flat surface is
+  // the map scaled so 1 mm^2 of flat map is 1 mm^2 of cortex.
+  const auto cut = authalic::io::read_surface(dir + "/whole.cut.surf.gii");
+  const auto flat = authalic::io::read_surface(dir + "/whole.flat.surf.gii");
+  ASSERT_EQ(cut.mesh.num_vertices(), map.mesh.num_vertices());
+  const double area = authalic::face_areas(cut.mesh.V, cut.mesh.F).sum();
+  const double white_area = authalic::face_areas(authalic::io::read_surface(white).mesh.V, authalic::io::read_surface(white).mesh.F).sum();
+  EXPECT_NEAR(area, white_area, 1e-3 * white_area);
+  EXPECT_NEAR(covered_area(flat.mesh.V, flat.mesh.F), area, 1e-3 * area);
+  // The cut path is the documented inferior-medial one between two landmark vertices, and the
+  // user can choose them; neighbours cannot be cut between.
+  EXPECT_GE(j.at("cut_path_vertices").get<int>(), 3);
+  const auto s = authalic::io::read_surface(white);
+  const int a = s.mesh.F(0, 0), b = s.mesh.F(0, 1);
+  EXPECT_EQ(run_command(authalic_binary() + " rectangle " + dir + "/x.surf.gii --surface " + white + " --cut-from " + std::to_string(a) +
+                            " --cut-to " + std::to_string(b),
+                        &output),
+            2)
+      << output;
+  EXPECT_NE(output.find("at least 3"), std::string::npos) << output;
+}
+
+TEST(RectangleCli, RefusesMixedOrMissingForms) {
+  std::string output;
+  EXPECT_EQ(run_command(authalic_binary() + " rectangle /tmp/x.surf.gii", &output), 2) << output;
+  EXPECT_EQ(run_command(authalic_binary() + " rectangle /tmp/x --lh a.gii", &output), 2) << output;  // --rh missing
+  EXPECT_EQ(run_command(authalic_binary() + " rectangle /tmp/x --surface a.gii --lh a.gii --rh b.gii", &output), 2) << output;
+}

@@ -1,0 +1,198 @@
+// The authalic square map (core/square_map.h, core/authalic_flow.h) on small meshes with known
+// answers: a flat square stays the identity, a non-uniformly triangulated planar disk ends with
+// equal vertex areas, density 2 doubles a region's share (DLF 5.5), the right hemisphere is the
+// mirror image of the left (orientation rule), thread count does not change a bit, and the DLF
+// building blocks (critical step, Delaunay flips, adaptive mesh flow) behave as the paper says.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+
+#include "common/hard_meshes.h"
+#include "core/authalic_flow.h"
+#include "core/metrics.h"
+#include "core/square_map.h"
+
+using namespace authalic;
+
+namespace {
+
+// Smallest max-norm distance between UV and the flat input's x,y under the 8 symmetries of the
+// unit square (the boundary's start corner and direction are a convention, not geometry).
+double distance_up_to_square_symmetry(const MatrixXd& UV, const MatrixXd& V) {
+  double best = 1e300;
+  for (int s = 0; s < 8; ++s) {
+    double worst = 0;
+    for (Eigen::Index v = 0; v < V.rows(); ++v) {
+      double x = V(v, 0), y = V(v, 1);
+      if (s & 1) std::swap(x, y);
+      if (s & 2) x = 1 - x;
+      if (s & 4) y = 1 - y;
+      worst = std::max({worst, std::abs(UV(v, 0) - x), std::abs(UV(v, 1) - y)});
+    }
+    best = std::min(best, worst);
+  }
+  return best;
+}
+
+// A spherical cap (radius 50 mm) lifted from the uneven planar disk, shifted off-centre so that
+// its most anterior vertex is unique: a stand-in for a curved left hemisphere patch.
+TriMesh curved_cap() {
+  TriMesh m = test::uneven_disk(16, 32);
+  for (Eigen::Index v = 0; v < m.V.rows(); ++v) {
+    const Eigen::Vector3d p = Eigen::Vector3d(m.V(v, 0) + 0.05 * m.V(v, 1) * m.V(v, 1), m.V(v, 1), 1.3).normalized();
+    m.V.row(v) = (50.0 * p + Eigen::Vector3d(-30, 10, 5)).transpose();
+  }
+  return m;
+}
+
+SquareMapOptions test_options() {
+  SquareMapOptions o;
+  o.flow.grid_resolution = 256;
+  return o;
+}
+
+}  // namespace
+
+TEST(SquareMap, FlatSquareStaysTheIdentity) {
+  const TriMesh m = test::square_grid(12);
+  SquareMapOptions o = test_options();
+  o.anatomical_anchor = false;
+  const SquareMapResult r = square_map(m.V, m.F, o);
+  ASSERT_EQ(r.V.rows(), m.V.rows());  // no corner or ear splits on a square grid
+  EXPECT_LT(distance_up_to_square_symmetry(r.UV, m.V), 1e-9);
+  EXPECT_TRUE(r.flow.converged);
+  EXPECT_EQ(r.flow.iterations, 0);  // already area-preserving: the flow does not move it
+  EXPECT_EQ(r.flips, 0);
+}
+
+TEST(SquareMap, NonUniformPlanarDiskEndsWithEqualVertexAreas) {
+  const TriMesh m = test::uneven_disk();  // triangle areas span about 1:1000
+  const SquareMapResult r = square_map(m.V, m.F, test_options());
+  const MapMetrics before = map_metrics(r.V, r.UV_initial, r.F, MapDomain::Square, 8);
+  const MapMetrics after = map_metrics(r.V, r.UV, r.F, MapDomain::Square, 8);
+  EXPECT_GT(before.vertex_ln_area.mean, 0.03);  // a disk's conformal square map stretches the corners
+  EXPECT_EQ(after.flips, 0);
+  EXPECT_LT(after.vertex_ln_area.mean, 0.01);
+  EXPECT_LT(after.vertex_ln_area.p99, 0.04);
+  EXPECT_LT(after.element_cv, 0.01);
+  EXPECT_LT(after.outside_fraction, 1e-12);
+  EXPECT_NEAR(signed_face_areas_2d(r.UV, r.F).sum(), 1.0, 1e-9);  // the square is covered once
+}
+
+TEST(SquareMap, DensityTwoGivesARegionTwiceItsNaturalShare) {
+  const TriMesh m = test::square_grid(32);
+  SquareMapOptions o = test_options();
+  o.anatomical_anchor = false;
+  o.density = VectorXd::Ones(m.num_vertices());
+  for (int v = 0; v < m.num_vertices(); ++v)
+    if (m.V(v, 0) <= 0.25 + 1e-12) o.density[v] = 2.0;
+  const SquareMapResult r = square_map(m.V, m.F, o);
+  ASSERT_EQ(r.flips, 0);
+  // Region: faces whose three vertices all have density 2 (x <= 1/4).
+  const VectorXd a3 = face_areas(r.V, r.F), a2 = signed_face_areas_2d(r.UV, r.F);
+  const VectorXd t = target_face_measure(r.V, r.F, o.density, 1.0);
+  double natural = 0, share = 0, target = 0;
+  for (Eigen::Index f = 0; f < r.F.rows(); ++f) {
+    bool in = true;
+    for (int c = 0; c < 3; ++c) in = in && o.density[r.F(f, c)] == 2.0;
+    if (!in) continue;
+    natural += a3[f] / a3.sum();
+    share += a2[f];
+    target += t[f];
+  }
+  EXPECT_NEAR(natural, 0.25, 1e-9);
+  EXPECT_NEAR(share / target, 1.0, 0.02);           // the share asked for, within 2%
+  EXPECT_NEAR(share / natural, 2.0 / 1.25, 0.05);   // 2 x 0.25 / (2 x 0.25 + 0.75) = 0.4 of the square
+}
+
+TEST(SquareMap, RightHemisphereIsTheMirrorImageOfTheLeft) {
+  const TriMesh left = curved_cap();
+  TriMesh right = left;
+  right.V.col(0) *= -1.0;  // mirror through the midsagittal plane: faces now point inward
+  const SquareMapResult l = square_map(left.V, left.F, test_options());
+  const SquareMapResult r = square_map(right.V, right.F, test_options());
+  EXPECT_NE(l.faces_reversed, r.faces_reversed);  // rule 1 turned one of them outward
+  EXPECT_EQ(l.anterior_vertex, r.anterior_vertex);
+  ASSERT_EQ(l.UV.rows(), r.UV.rows());
+  double worst = 0;
+  for (Eigen::Index v = 0; v < l.UV.rows(); ++v)
+    worst = std::max({worst, std::abs(r.UV(v, 0) - (1.0 - l.UV(v, 0))), std::abs(r.UV(v, 1) - l.UV(v, 1))});
+  // Equal up to the discretisation (corner snapping and the grid see the boundary walked the
+  // other way round): far below an element's width (1/32).
+  EXPECT_LT(worst, 2e-3);
+  // Rule 2: the frontal pole maps near the top middle of the square.
+  EXPECT_NEAR(l.UV(l.anterior_vertex, 0), 0.5, 0.1);
+  EXPECT_GT(l.UV(l.anterior_vertex, 1), 0.9);
+}
+
+TEST(SquareMap, SameBitsForOneAndTwoThreads) {
+  const TriMesh m = curved_cap();
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const SquareMapResult a = square_map(m.V, m.F, test_options());
+  omp_set_num_threads(2);
+  const SquareMapResult b = square_map(m.V, m.F, test_options());
+  omp_set_num_threads(saved);
+  EXPECT_EQ((a.UV - b.UV).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(SquareMap, CurvedPatchMeetsTheAccuracyTargets) {
+  const TriMesh m = curved_cap();
+  const SquareMapResult r = square_map(m.V, m.F, test_options());
+  const MapMetrics mm = map_metrics(r.V, r.UV, r.F, MapDomain::Square, 8);
+  EXPECT_EQ(mm.flips, 0);
+  EXPECT_LT(mm.vertex_ln_area.mean, 0.01);
+  EXPECT_LT(mm.element_cv, 0.01);
+  // The report states what it measured.
+  EXPECT_NEAR(r.flow.final_vertex_mean, mm.vertex_ln_area.mean, 1e-9);
+}
+
+// ---- DLF building blocks -------------------------------------------------------------------
+
+TEST(DiscreteLieFlow, CriticalStepIsTheFirstRootOfTheSignedArea) {
+  // Moving the apex (0, 1) down at speed 2 flattens the triangle at s = 1/2 (DLF eq. 5).
+  const Eigen::Vector2d p[3] = {{0, 0}, {1, 0}, {0, 1}};
+  const Eigen::Vector2d d[3] = {{0, 0}, {0, 0}, {0, -2}};
+  EXPECT_NEAR(critical_step(p, d), 0.5, 1e-12);
+  // A translation never degenerates a triangle.
+  const Eigen::Vector2d t[3] = {{1, 1}, {1, 1}, {1, 1}};
+  EXPECT_TRUE(std::isinf(critical_step(p, t)));
+  // Shrinking about the centroid degenerates it at s = 1 (quadratic with a double root).
+  const Eigen::Vector2d c(1.0 / 3, 1.0 / 3);
+  const Eigen::Vector2d s[3] = {c - p[0], c - p[1], c - p[2]};
+  EXPECT_NEAR(critical_step(p, s), 1.0, 1e-6);
+}
+
+TEST(DiscreteLieFlow, DelaunayFlipReplacesANonDelaunayDiagonal) {
+  // Two flat triangles on the long diagonal of a thin rhombus: the angles opposite the shared
+  // edge are obtuse (sum > pi), so the edge flips to the short diagonal.
+  MatrixXd UV(4, 2);
+  UV << -1, 0, 1, 0, 0, 0.3, 0, -0.3;
+  MatrixXi F(2, 3);
+  F << 0, 1, 2, 1, 0, 3;
+  EXPECT_EQ(delaunay_flip(UV, F), 1);
+  for (Eigen::Index f = 0; f < 2; ++f) {
+    bool has2 = false, has3 = false;
+    for (int c = 0; c < 3; ++c) has2 = has2 || F(f, c) == 2, has3 = has3 || F(f, c) == 3;
+    EXPECT_TRUE(has2 && has3) << "face " << f << " lacks the new edge 2-3";
+  }
+  EXPECT_EQ(count_flipped(UV, F), 0);
+  EXPECT_EQ(delaunay_flip(UV, F), 0);  // now Delaunay: nothing left to flip
+}
+
+TEST(DiscreteLieFlow, AdaptiveMeshFlowReducesDistortionWithoutFlips) {
+  const TriMesh m = test::uneven_disk(12, 24);
+  SquareMapOptions o = test_options();
+  o.flow.method = FlowMethod::Mesh;
+  o.flow.max_iterations = 60;
+  const SquareMapResult r = square_map(m.V, m.F, o);
+  EXPECT_EQ(r.flips, 0);
+  EXPECT_GT(r.flow.iterations, 0);
+  EXPECT_LT(r.flow.final_vertex_mean, 0.5 * r.flow.initial_vertex_mean);
+  // Zou's fixed schedule (eq. 19) takes exactly its K steps.
+  o.flow.fixed_steps = 5;
+  const SquareMapResult k = square_map(m.V, m.F, o);
+  EXPECT_EQ(k.flow.iterations, 5);
+  EXPECT_EQ(k.flips, 0);
+}
