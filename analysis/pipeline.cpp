@@ -20,6 +20,7 @@
 #include "core/conformal_map.h"
 #include "core/error.h"
 #include "core/metrics.h"
+#include "core/square_map.h"
 #include "core/version.h"
 #include "io/atomic_file.h"
 #include "io/checksum.h"
@@ -148,15 +149,15 @@ namespace {
 
 // One hemisphere's cortex onto the unit square: conformal start, then the authalic flow.
 // (The anatomical orientation rule and the mirroring of the right hemisphere live in the map.)
+// The authalic square map with the anatomical orientation rule (core/square_map.h): faces
+// outward, frontal pole at the top middle, so the right hemisphere comes out as the mirror image
+// of the left, as a reader of the two flat maps side by side expects.
 void map_hemisphere(Hemisphere& h, const ProgressFn& progress) {
-  RectangleBoundaryMap boundary;
-  ConformalMapResult c = conformal_rectangle_map(h.white.mesh.V, h.cortex_faces, boundary);
-  FlowOptions fo;
-  FlowResult r = authalic_flow(c.V, c.F, c.UV, c.side_mask, fo, progress);
-  h.flat_V = c.V;
-  h.flat_F = c.F;
-  h.uv = r.UV;
-  h.flow = r.report;
+  SquareMapResult r = square_map(h.white.mesh.V, h.cortex_faces, SquareMapOptions{}, progress);
+  h.flat_V = std::move(r.V);
+  h.flat_F = std::move(r.F);
+  h.uv = std::move(r.UV);
+  h.flow = r.flow;
 }
 
 // The element image of one block as a K x K NIfTI (voxel (col, row)); the affine is a plain
