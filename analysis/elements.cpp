@@ -48,9 +48,6 @@ void trace_inserted_vertices(ElementMap& m, const MatrixXi& F_surface, const std
   const int nv = m.num_surface_vertices;
   const int nm = static_cast<int>(m.D.rows());
   if (nm == nv) return;
-  std::map<EdgeKey, int> current;  // directed half-edge (a, b) -> the third vertex of its face
-  for (int f = 0; f < F_surface.rows(); ++f)
-    for (int c = 0; c < 3; ++c) current[{F_surface(f, c), F_surface(f, (c + 1) % 3)}] = F_surface(f, (c + 2) % 3);
   std::set<EdgeKey> map_half_edges;
   std::vector<std::set<int>> ring(static_cast<std::size_t>(nm));
   for (int f = 0; f < m.F.rows(); ++f)
@@ -60,6 +57,22 @@ void trace_inserted_vertices(ElementMap& m, const MatrixXi& F_surface, const std
       ring[static_cast<std::size_t>(a)].insert(b);
       ring[static_cast<std::size_t>(b)].insert(a);
     }
+  // The map may have turned the surface's faces around (square_map's outward rule, e.g. on a
+  // right hemisphere): replay the splits on the surface faces in the map's orientation.
+  int same = 0, reversed = 0;
+  for (int f = 0; f < F_surface.rows(); ++f) {
+    const int a = F_surface(f, 0), b = F_surface(f, 1);
+    same += map_half_edges.count({a, b}) > 0;
+    reversed += map_half_edges.count({b, a}) > 0;
+  }
+  const bool flip = reversed > same;
+  std::map<EdgeKey, int> current;  // directed half-edge (a, b) -> the third vertex of its face
+  for (int f = 0; f < F_surface.rows(); ++f) {
+    const int v0 = F_surface(f, 0), v1 = flip ? F_surface(f, 2) : F_surface(f, 1), v2 = flip ? F_surface(f, 1) : F_surface(f, 2);
+    current[{v0, v1}] = v2;
+    current[{v1, v2}] = v0;
+    current[{v2, v0}] = v1;
+  }
   // Map faces as rotation-normalised triples, to recognise the pieces of a split face.
   auto face_key = [](int a, int b, int c) {
     if (b < a && b < c) return std::array<int, 3>{b, c, a};

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -96,6 +97,13 @@ void check_id(const std::string& id) {
       throw InputError("--id '" + id + "': BIDS labels are letters and digits only; e.g. 'patient01'");
 }
 
+// Surface files name the cortex by their triangles; labels and masks by their vertices.
+bool is_surface_file(const std::string& path) {
+  for (const char* ext : {".surf.gii", ".surf.gii.gz", ".vtk", ".vtp", ".ply", ".obj", ".stl"})
+    if (path.size() >= std::strlen(ext) && path.compare(path.size() - std::strlen(ext), std::string::npos, ext) == 0) return true;
+  return false;
+}
+
 void load_hemisphere(Hemisphere& h, const std::string& white, const std::string& pial, const std::string& cortex) {
   h.white = io::read_surface(white);
   h.pial = io::read_surface(pial);
@@ -103,15 +111,31 @@ void load_hemisphere(Hemisphere& h, const std::string& white, const std::string&
   if (h.pial.mesh.num_vertices() != n)
     throw InputError(pial + ": has " + std::to_string(h.pial.mesh.num_vertices()) + " vertices but " + white + " has " +
                      std::to_string(n) + "; white and pial must come from the same subject and hemisphere");
-  h.cortex = io::read_region_vertices(cortex, n);
-  std::vector<bool> in(n, false);
-  for (int v : h.cortex) in[v] = true;
-  std::vector<Eigen::Vector3i> faces;
-  const MatrixXi& F = h.white.mesh.F;
-  for (int f = 0; f < F.rows(); ++f)
-    if (in[F(f, 0)] && in[F(f, 1)] && in[F(f, 2)]) faces.emplace_back(F(f, 0), F(f, 1), F(f, 2));
-  h.cortex_faces.resize(static_cast<Eigen::Index>(faces.size()), 3);
-  for (std::size_t f = 0; f < faces.size(); ++f) h.cortex_faces.row(static_cast<Eigen::Index>(f)) = faces[f].transpose();
+  if (is_surface_file(cortex)) {
+    // A surface on the same vertices whose triangles are the cortex (e.g. FreeSurfer's flat
+    // patch as GIFTI): its face set is the region, as `authalic flatten --faces-from`.
+    const io::Surface region = io::read_surface(cortex);
+    if (region.mesh.num_vertices() != n)
+      throw InputError(cortex + ": has " + std::to_string(region.mesh.num_vertices()) + " vertices but " + white + " has " +
+                       std::to_string(n) + "; a cortex face set must be on the white surface's vertices");
+    h.cortex_faces = region.mesh.F;
+    std::vector<char> used(n, 0);
+    for (Eigen::Index f = 0; f < h.cortex_faces.rows(); ++f)
+      for (int c = 0; c < 3; ++c) used[h.cortex_faces(f, c)] = 1;
+    h.cortex.clear();
+    for (int v = 0; v < n; ++v)
+      if (used[v]) h.cortex.push_back(v);
+  } else {
+    h.cortex = io::read_region_vertices(cortex, n);
+    std::vector<bool> in(n, false);
+    for (int v : h.cortex) in[v] = true;
+    std::vector<Eigen::Vector3i> faces;
+    const MatrixXi& F = h.white.mesh.F;
+    for (int f = 0; f < F.rows(); ++f)
+      if (in[F(f, 0)] && in[F(f, 1)] && in[F(f, 2)]) faces.emplace_back(F(f, 0), F(f, 1), F(f, 2));
+    h.cortex_faces.resize(static_cast<Eigen::Index>(faces.size()), 3);
+    for (std::size_t f = 0; f < faces.size(); ++f) h.cortex_faces.row(static_cast<Eigen::Index>(f)) = faces[f].transpose();
+  }
   const TopologyReport t = analyze_topology(h.white.mesh.V, h.cortex_faces);
   if (!t.is_disk())
     throw InputError(cortex + ": the cortex region on " + white + " is not one disk (" + t.summary() +
@@ -147,7 +171,6 @@ SubjectInputs inputs_from_subjects_dir(const std::string& subjects_dir, const st
 
 namespace {
 
-// One hemisphere's cortex onto the unit square: conformal start, then the authalic flow.
 // (The anatomical orientation rule and the mirroring of the right hemisphere live in the map.)
 // The authalic square map with the anatomical orientation rule (core/square_map.h): faces
 // outward, frontal pole at the top middle, so the right hemisphere comes out as the mirror image

@@ -1,5 +1,8 @@
 // authalic run: the clinician's per-subject pipeline (analysis/pipeline.h). Exit codes: 0 ok,
 // 2 bad input (nothing written), 3 processing failure.
+#include <unistd.h>
+
+#include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
@@ -37,7 +40,16 @@ int run(RunArgs& a) {
         throw InputError(std::string(flag) + " is missing; give all six surface/label inputs, or --subjects-dir and --subject");
   }
   if (in.pet.empty()) throw InputError("--pet is missing; give the subject's PET (NIfTI, MGH/MGZ or a DICOM folder)");
-  const analysis::RunSummary s = analysis::run_subject(in, a.options, terminal_progress());
+  analysis::RunSummary s;
+  try {
+    s = analysis::run_subject(in, a.options, terminal_progress());
+  } catch (...) {
+    // A run that failed while writing (e.g. disk full) leaves no half-written staging folder.
+    std::error_code ec;
+    std::filesystem::remove_all(
+        std::filesystem::path(a.options.out_dir) / (".sub-" + in.id + ".partial-" + std::to_string(::getpid())), ec);
+    throw;
+  }
   if (global_options().json) {
     nlohmann::json j = {{"subject_dir", s.subject_dir},
                         {"flips", {{"left", s.flips_left}, {"right", s.flips_right}}},
@@ -75,7 +87,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_option("--lh-pial", in.lh_pial, "Left pial surface, same vertices as --lh-white");
   sub->add_option("--rh-white", in.rh_white, "Right white surface");
   sub->add_option("--rh-pial", in.rh_pial, "Right pial surface");
-  sub->add_option("--lh-cortex", in.lh_cortex, "Left cortex region (FreeSurfer label, GIFTI label/mask): one disk");
+  sub->add_option("--lh-cortex", in.lh_cortex, "Left cortex region: FreeSurfer label or GIFTI label/mask (its vertices), or a surface on the same vertices whose triangles are the cortex (.surf.gii, e.g. a flat patch); one disk");
   sub->add_option("--rh-cortex", in.rh_cortex, "Right cortex region");
   sub->add_option("--subjects-dir", a->subjects_dir, "FreeSurfer SUBJECTS_DIR (instead of the six inputs above)");
   sub->add_option("--subject", a->subject, "FreeSurfer subject name in --subjects-dir");
