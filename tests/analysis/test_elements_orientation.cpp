@@ -4,6 +4,8 @@
 
 #include "analysis/elements.h"
 #include "common/hard_meshes.h"
+#include "common/test_data.h"
+#include "io/surface_io.h"
 #include "core/square_map.h"
 
 using namespace authalic;
@@ -38,4 +40,21 @@ TEST(ElementMapOrientation, MirroredHemisphereTracesItsInsertedVertices) {
     // Inserted vertices sit on the surface where the flattening put them.
     EXPECT_LT((em.V3 - m->V).cwiseAbs().maxCoeff(), 1e-9);
   }
+}
+
+TEST(ElementMapOrientation, MirroredFsaverage5LeftHemisphereAsARightOne) {
+  // The case that failed before the tracing followed the map's orientation: fsaverage5's left
+  // white surface mirrored (x -> -x) with flat_left's cortex faces, mapped by square_map.
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(flat, "fsaverage5/flat_left.gii.gz");
+  TriMesh right = io::read_surface(white).mesh;
+  right.V.col(0) *= -1.0;
+  const MatrixXi F = io::read_surface(flat).mesh.F;
+  const SquareMapResult r = square_map(right.V, F, SquareMapOptions{});
+  ASSERT_TRUE(r.faces_reversed);
+  ASSERT_GT(r.V.rows(), right.V.rows());
+  const VectorXd values = VectorXd::Ones(right.V.rows());
+  const ElementMap em = prepare_element_map(right.V, F, r.UV, r.F, values, ElementDomain::Square, "right square map");
+  EXPECT_EQ(em.inserted_vertices, r.V.rows() - right.V.rows());
+  EXPECT_LT((em.V3 - r.V).cwiseAbs().maxCoeff(), 1e-6);
 }
