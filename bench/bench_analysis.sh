@@ -3,15 +3,17 @@
 # Connectome Workbench, equal-area elements, normative build/compare. Prints a table with the
 # targets; peak memory from /usr/bin/time -v ("Maximum resident set size").
 #
-#   bench/bench_analysis.sh [path/to/authalic]   (default: build/authalic)
+#   bench/bench_analysis.sh [path/to/authalic]   (default: $AUTHALIC, else build/authalic)
 #
 # Inputs are made on the fly in a temporary folder (python3 + numpy + nibabel): a 163,842-vertex
 # cortex (fsaverage5 pial subdivided twice, or a sphere when ../shared/data is absent) in a 1 mm
 # volume (the ICBM T1 grid: step 0.5 mm, 21 samples over 10 mm), a 150,544-vertex folded square
-# for the elements, and 1,000 two-hemisphere element tables at K = 64 for the reference.
+# for the elements, and 1,000 two-hemisphere element tables at K = 64 for the reference. Then the
+# issue-6 validation on the committed phantom (sample_data): `authalic group`, leave-one-out among
+# the 20 controls, and the two patients' planted region (a few minutes: 22 subjects' maps).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-AUTHALIC="$(realpath "${1:-$ROOT/build/authalic}")"
+AUTHALIC="$(realpath "${1:-${AUTHALIC:-$ROOT/build/authalic}}")"
 SHARED="$ROOT/../shared/data"
 PY=/usr/bin/python3
 WORK="$(mktemp -d /tmp/authalic-bench-analysis.XXXXXX)"
@@ -120,22 +122,28 @@ run() {
 json() { echo "$OUT" | $PY -c "import json,sys; print(json.load(sys.stdin)$1)"; }
 
 ROWS=()
-row() { ROWS+=("$(printf '%-48s %12s %12s %10s %s' "$1" "$2" "$3" "$4" "$5")"); }
+# row NAME COMPUTE CPU WALL RSS NOTE
+row() { ROWS+=("$(printf '%-46s %9s %9s %9s %9s  %s' "$1" "$2" "$3" "$4" "$5" "$6")"); }
 
 run sample "$AUTHALIC" sample "$WORK/pet1mm.nii.gz" "$WORK/cortex150k.surf.gii" "$WORK/np.func.gii" --json --png "$WORK/np.png"
 row "normal projection ($(json "['vertices']") v x $(json "['samples_per_vertex']") samples)" \
-    "$(printf %.3f "$(json "['sampling_seconds']")")" "$(printf %.2f "$WALL")" "$RSS" "<= 0.5 s (sampling)"
+    "$(printf %.3f "$(json "['sampling_seconds']")")" "$(printf %.3f "$(json "['sampling_cpu_seconds']")")" "$(printf %.2f "$WALL")" "$RSS" \
+    "<= 0.5 s (sampling)"
 
 run elements "$AUTHALIC" elements "$WORK/sheet.surf.gii" "$WORK/sheet_map.surf.gii" "$WORK/sheet_values.func.gii" "$WORK/el" --k 64 --json
-row "elements K=64 (150,544 vertices)" "$(printf %.3f "$(json "['elements_seconds']")")" "$(printf %.2f "$WALL")" "$RSS" \
+row "elements K=64 (150,544 vertices)" "$(printf %.3f "$(json "['elements_seconds']")")" \
+    "$(printf %.3f "$(json "['elements_cpu_seconds']")")" "$(printf %.2f "$WALL")" "$RSS" \
     "<= 0.5 s (elements); CV $(printf %.4f "$(json "['element_area_cv']")")"
 
 run build250 "$AUTHALIC" normative build "$WORK/ref250.json" --list "$WORK/tables_250.txt" --json
-row "normative build, 250 tables K=64 x 2 hemis" "-" "$(printf %.2f "$WALL")" "$RSS" "memory vs N: compare with 1,000"
+row "normative build, 250 tables K=64 x 2 hemis" "$(printf %.2f "$(json "['seconds']")")" "$(printf %.2f "$(json "['cpu_seconds']")")" \
+    "$(printf %.2f "$WALL")" "$RSS" "memory vs N: compare with 1,000"
 run build "$AUTHALIC" normative build "$WORK/ref.json" --list "$WORK/tables_1000.txt" --json
-row "normative build, 1,000 tables K=64 x 2 hemis" "-" "$(printf %.2f "$WALL")" "$RSS" "<= 5 s, memory independent of N"
+row "normative build, 1,000 tables K=64 x 2 hemis" "$(printf %.2f "$(json "['seconds']")")" "$(printf %.2f "$(json "['cpu_seconds']")")" \
+    "$(printf %.2f "$WALL")" "$RSS" "<= 5 s, memory independent of N"
 run compare "$AUTHALIC" normative compare "$WORK/ref.json" "$WORK/tables/sub-patient_elements.csv" "$WORK/cmp" --json
-row "normative compare (8,192 elements)" "-" "$(printf %.3f "$WALL")" "$RSS" \
+row "normative compare (8,192 elements)" "$(printf %.3f "$(json "['seconds']")")" "$(printf %.3f "$(json "['cpu_seconds']")")" \
+    "$(printf %.3f "$WALL")" "$RSS" \
     "<= 0.2 s; $(json "['counts']['hypo']") hypo elements (200 planted), $(json "['clusters'].__len__()") clusters"
 
 # Ribbon mode on fsaverage5 beside Connectome Workbench (issue 5: Workbench ~5.7 s).
@@ -143,7 +151,8 @@ if [ -f "$SHARED/spm/PET.nii" ] && [ -f "$SHARED/fsaverage5/pial_left.gii.gz" ];
   zcat "$SHARED/fsaverage5/pial_left.gii.gz" > "$WORK/pial.surf.gii"
   zcat "$SHARED/fsaverage5/white_left.gii.gz" > "$WORK/white.surf.gii"
   run ribbon "$AUTHALIC" sample "$SHARED/spm/PET.nii" "$WORK/pial.surf.gii" "$WORK/rib.func.gii" --ribbon "$WORK/white.surf.gii" --json
-  row "ribbon, fsaverage5 (10,242 v), spm/PET.nii" "$(printf %.3f "$(json "['sampling_seconds']")")" "$(printf %.2f "$WALL")" "$RSS" "authalic"
+  row "ribbon, fsaverage5 (10,242 v), spm/PET.nii" "$(printf %.3f "$(json "['sampling_seconds']")")" \
+      "$(printf %.3f "$(json "['sampling_cpu_seconds']")")" "$(printf %.2f "$WALL")" "$RSS" "authalic (Workbench: ~5.7 s in the issue)"
   if command -v wb_command > /dev/null; then
     run wb wb_command -volume-to-surface-mapping "$SHARED/spm/PET.nii" "$WORK/pial.surf.gii" "$WORK/wb.func.gii" \
         -ribbon-constrained "$WORK/white.surf.gii" "$WORK/pial.surf.gii"
@@ -151,14 +160,66 @@ if [ -f "$SHARED/spm/PET.nii" ] && [ -f "$SHARED/fsaverage5/pial_left.gii.gz" ];
 import nibabel as nib, numpy as np
 a = nib.load('$WORK/wb.func.gii').darrays[0].data.astype(float); b = nib.load('$WORK/rib.func.gii').darrays[0].data.astype(float)
 m = a != 0; print('%.4f' % np.corrcoef(a[m], b[m])[0, 1])")
-    row "ribbon, same, wb_command -ribbon-constrained" "-" "$(printf %.2f "$WALL")" "$RSS" "Workbench 1.5.0; Pearson with ours $R (>= 0.98)"
+    row "ribbon, same, wb_command -ribbon-constrained" "-" "-" "$(printf %.2f "$WALL")" "$RSS" "Workbench 1.5.0; Pearson with ours $R (>= 0.98)"
   else
-    row "ribbon, wb_command -ribbon-constrained" "-" "-" "-" "wb_command not installed (connectome-workbench)"
+    row "ribbon, wb_command -ribbon-constrained" "-" "-" "-" "-" "wb_command not installed (connectome-workbench)"
   fi
 fi
 
+# Issue 6 validation on the phantom cohort (the committed sample_data: 20 controls, 2 patients with
+# a -25 % region): `authalic group`, then leave-one-out (each control against a reference built from
+# the other 19) and the patients against the 20-control reference, with the command-line tools.
+# "Fully inside" the region: the element's value of the ground-truth indicator (1 on planted
+# vertices, linear on triangles; `authalic elements` on the patient's own flat map) is 1; outside: 0.
+run group "$AUTHALIC" group "$ROOT/sample_data/cohort.csv" "$WORK/grp" --jobs 2 --k 32 --force --json
+row "group: sample_data, 20 controls + 2 patients" "-" "-" "$(printf %.1f "$WALL")" "$RSS" \
+    "$(json "['failed']") failed; reference exit $(json "['reference_exit_code']")"
+VALIDATION=$(AUTHALIC="$AUTHALIC" SAMPLE="$ROOT/sample_data" GRP="$WORK/grp" VAL="$WORK/val" $PY - <<'EOF'
+import csv, json, os, subprocess, numpy as np, nibabel as nib
+exe, sample, grp, val = (os.environ[k] for k in ("AUTHALIC", "SAMPLE", "GRP", "VAL"))
+os.makedirs(val)
+def sh(*args):
+    return subprocess.run([exe, *args], check=True, capture_output=True, text=True).stdout
+rows = list(csv.DictReader(open(os.path.join(sample, "cohort.csv"))))
+controls = [r["subject_id"] for r in rows if r["role"] == "control"]
+patients = [r["subject_id"] for r in rows if r["role"] == "patient"]
+table = lambda kind, s: os.path.join(grp, kind, f"sub-{s}", f"sub-{s}_elements.csv")
+fractions = []
+for s in controls:
+    ref = os.path.join(val, f"loo-{s}.json")
+    sh("normative", "build", ref, *[table("controls", c) for c in controls if c != s], "--quiet")
+    j = json.loads(sh("normative", "compare", ref, table("controls", s), os.path.join(val, f"loo-{s}"), "--json", "--quiet"))
+    fractions.append((j["counts"]["hypo"] + j["counts"]["hyper"]) / j["counts"]["compared"])
+f = 100 * np.array(fractions)
+print(f"loo|leave-one-out, {len(controls)} controls (vs other {len(controls)-1})|mean {f.mean():.1f}%, largest {f.max():.1f}% "
+      f"flagged at |z|>=2 (<= 5%); {int((f > 5).sum())} control(s) above 5%")
+for p in patients:
+    d = os.path.join(grp, "patients", f"sub-{p}")
+    inside = outside = found = false = 0
+    sh("normative", "compare", os.path.join(grp, "normative.json"), table("patients", p), os.path.join(val, p), "--quiet")
+    z = np.asarray(nib.load(os.path.join(val, f"{p}_z.nii.gz")).dataobj, dtype=float)
+    for b, (hemi, fs) in enumerate((("L", "lh"), ("R", "rh"))):
+        out = os.path.join(val, f"truth-{p}-{fs}")
+        sh("elements", os.path.join(sample, "surf", f"{fs}.white"), os.path.join(d, f"sub-{p}_hemi-{hemi}_space-authalic_flat.surf.gii"),
+           os.path.join(sample, "truth", f"{fs}.lesion.label.gii"), out, "--k", "32", "--quiet")
+        for e in csv.DictReader(open(out + ".csv")):
+            t, zz = float(e["value"]), z[int(e["col"]), int(e["row"]), b]
+            if t >= 1 - 1e-9:
+                inside += 1; found += zz <= -2
+            elif t <= 1e-12:
+                outside += 1; false += abs(zz) >= 2
+    print(f"pat|{p}: {inside} elements fully inside the -25% region|{100*found/inside:.1f}% of them flagged hypo (>= 90%); "
+          f"{100*false/outside:.1f}% of {outside} elements outside flagged (<= 5%)")
+EOF
+)
+while IFS='|' read -r _ name note; do row "$name" "-" "-" "-" "-" "$note"; done <<< "$VALIDATION"
+
 echo
-printf '%-48s %12s %12s %10s %s\n' "benchmark" "compute (s)" "wall (s)" "RSS (MB)" "target / note"
+printf '%-46s %9s %9s %9s %9s  %s\n' "benchmark" "step (s)" "CPU (s)" "wall (s)" "RSS (MB)" "target / note"
 printf '%s\n' "------------------------------------------------------------------------------------------------------------------"
 printf '%s\n' "${ROWS[@]}"
-echo "threads: ${OMP_NUM_THREADS:-all} of $(nproc) cores; compute = the step alone, wall = whole command incl. file I/O"
+echo "threads: ${OMP_NUM_THREADS:-all} of $(nproc) cores; step = in-process wall time of the step (sample/elements: the"
+echo "computation alone; normative: the whole command incl. file I/O); CPU = CPU seconds of all threads in that step (what"
+echo "it costs on an idle machine, whatever the load); wall = whole process incl. start-up (~0.2 s of shared-library"
+echo "loading for any authalic command) and file I/O; RSS = peak resident memory of the process"
+echo "load average at the end: $(cut -d' ' -f1-3 /proc/loadavg) (other builds running make every number larger)"

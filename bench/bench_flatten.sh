@@ -29,6 +29,7 @@ run() {
     --initial "$work/$name.init.surf.gii" --metrics "$work/$name.json" -q "$@" 2>"$work/$name.time"
 }
 wall() { awk -F': ' '/Elapsed \(wall clock\)/{print $2}' "$work/$1.time" | awk -F: '{ if (NF==3) print $1*3600+$2*60+$3; else print $1*60+$2 }'; }
+cpu() { awk -F': ' '/User time|System time/{t += $2} END {printf "%.2f", t}' "$work/$1.time"; }
 rss() { awk -F': ' '/Maximum resident set size/{printf "%.0f", $2/1024}' "$work/$1.time"; }
 
 run B1 "$data/white_left.gii.gz" --faces-from "$data/flat_left.gii.gz"
@@ -42,6 +43,23 @@ if cmp -s "$work/t1.surf.gii" "$work/t2.surf.gii"; then same=identical; else sam
 # FreeSurfer's flat map, measured the same way (x,y in mm: metrics rescale it to the unit square).
 "$bin" metrics "$data/white_left.gii.gz" "$data/flat_left.gii.gz" --json > "$work/fs.json"
 
+# CGAL 5.5's Discrete_authalic_parameterizer_3 with an arc-length square border (Debian libcgal-dev,
+# built here for the benchmark only), on the same regions.
+cgal=none
+if [ -f /usr/include/CGAL/Surface_mesh_parameterization/Discrete_authalic_parameterizer_3.h ]; then
+  g++ -O2 -std=c++17 -DCGAL_EIGEN3_ENABLED -I/usr/include/eigen3 bench/cgal_authalic.cpp -o "$work/cgal_authalic"
+  cgal=built
+  for n in B1 B2 B3; do
+    surf="$data/white_left.gii.gz"; faces="$data/flat_left.gii.gz"
+    [ $n = B2 ] && surf="$data/pial_left.gii.gz"
+    [ $n = B3 ] && surf="$work/b3.surf.gii" && faces="$work/b3.surf.gii"
+    $py bench/cgal_io.py off "$surf" "$faces" "$work/$n.off" "$work/$n.idx.npy"
+    /usr/bin/time -v "$work/cgal_authalic" "$work/$n.off" "$work/$n.cgal.txt" 2>"$work/$n-cgal.time"
+    $py bench/cgal_io.py uv "$surf" "$faces" "$work/$n.cgal.txt" "$work/$n.idx.npy" "$work/$n-cgal.uv.surf.gii"
+    "$bin" metrics "$surf" "$work/$n-cgal.uv.surf.gii" --json > "$work/$n-cgal.json"
+  done
+fi
+
 for n in B1 B2 B3 B1-mesh; do
   surf="$data/white_left.gii.gz"; [ $n = B2 ] && surf="$data/pial_left.gii.gz"; [ $n = B3 ] && surf="$work/b3.surf.gii"
   $py "$evalmap" "$surf" "$work/$n.uv.surf.gii" --domain square --k 32 --json > "$work/$n.eval.json"
@@ -49,7 +67,8 @@ done
 $py "$evalmap" "$data/white_left.gii.gz" "$work/B1.init.surf.gii" --domain square --k 32 --json > "$work/B1-conformal.eval.json"
 
 WALL_B1=$(wall B1) WALL_B2=$(wall B2) WALL_B3=$(wall B3) WALL_MESH=$(wall B1-mesh) \
-RSS_B1=$(rss B1) RSS_B2=$(rss B2) RSS_B3=$(rss B3) RSS_MESH=$(rss B1-mesh) SAME=$same WORK=$work \
+RSS_B1=$(rss B1) RSS_B2=$(rss B2) RSS_B3=$(rss B3) RSS_MESH=$(rss B1-mesh) SAME=$same WORK=$work CGAL=$cgal \
+CPU_B1=$(cpu B1) CPU_B2=$(cpu B2) CPU_B3=$(cpu B3) CPU_MESH=$(cpu B1-mesh) \
 $py - <<'EOF'
 import json, os, numpy as np, nibabel as nib
 w = os.environ['WORK']
@@ -66,11 +85,19 @@ res = {}
 for n, key in [('B1', 'B1'), ('B2', 'B2'), ('B3', 'B3'), ('B1-mesh', 'MESH')]:
     j = J(f'{n}.json'); fl = j['flow']
     res[n] = j
-    row(f'{n} authalic' if n != 'B1-mesh' else 'B1 DLF mesh flow', j['metrics'], os.environ['WALL_' + key], os.environ['RSS_' + key],
+    row(f'{n} authalic' if n != 'B1-mesh' else 'B1 DLF mesh flow', j['metrics'], os.environ['WALL_' + key] + ' (cpu ' + os.environ['CPU_' + key] + ')', os.environ['RSS_' + key],
         f"{fl['iterations']}+{fl['polish_iterations']}", J(f'{n}.eval.json'))
 for n in ['B1', 'B2', 'B3']:
     row(f'{n} conformal (initial)', J(f'{n}.json')['initial_metrics'], '-', '-', '-', J('B1-conformal.eval.json') if n == 'B1' else None)
 row('FreeSurfer flat_left', J('fs.json'), '-', '-', '-', None)
+if os.environ['CGAL'] == 'built':
+    for n in ['B1', 'B2', 'B3']:
+        t = open(f'{w}/{n}-cgal.time').read()
+        wall = [l.split(': ')[1] for l in t.splitlines() if 'Elapsed (wall clock)' in l][0].split(':')
+        rss = [l.split(': ')[1] for l in t.splitlines() if 'Maximum resident' in l][0]
+        row(f'{n} CGAL discrete authalic', J(f'{n}-cgal.json'), f'{float(wall[-2]) * 60 + float(wall[-1]):.2f}', f'{int(rss) // 1024}', '-', None)
+else:
+    print('(CGAL rows skipped: Debian libcgal-dev is not installed)')
 hdr = ('map', 'wall s', 'RSS MB', 'iter', 'flips', 'face mean', 'face p95', 'vert mean', 'vert p99', 'vert max', 'CV 32x32', 'mean Λ', 'evalmap CV', 'evalmap face')
 print('| ' + ' | '.join(hdr) + ' |')
 print('|' + '|'.join(['---'] * len(hdr)) + '|')
@@ -85,7 +112,8 @@ print()
 print(f'resolution independence (B1 vs B3 on B1\'s {len(used)} region vertices): mean |Δuv| = {d.mean():.4f}, max {d.max():.4f}')
 print(f'threads: 1 vs 2 threads give {os.environ["SAME"]} outputs; seconds (initial map / flow) B1 {res["B1"]["seconds"]["initial_map"]:.2f}/{res["B1"]["seconds"]["flow"]:.2f},'
       f' B3 {res["B3"]["seconds"]["initial_map"]:.2f}/{res["B3"]["seconds"]["flow"]:.2f}')
-print(f'load average at the end: {open("/proc/loadavg").read().split()[0:3]} on {os.cpu_count()} cores (other work makes every time larger)')
+print(f'load average at the end: {open("/proc/loadavg").read().split()[0:3]} on {os.cpu_count()} cores (other work makes every wall time larger;'
+      ' cpu = user + system seconds of the process, all threads)')
 print()
 ok = True
 def req(name, val, lim):
