@@ -239,7 +239,11 @@ void draw_frame_decorations(io::RgbImage& img, const FlatLayout& L, const std::s
   const int s = L.text_scale;
   // The frame sits just outside the plot so it never hides data.
   raster::draw_rect(img, L.left - 1, L.top - 1, L.plot_width + 2, L.plot_height + 2, kBlack);
-  if (!title.empty()) raster::draw_text_centred(img, L.left + L.plot_width / 2, 6 * s, title, kBlack, s + 1);
+  if (!title.empty()) {
+    // Centred over the plot, but never past the picture's left edge (a title wider than the plot).
+    const int half = raster::text_width(title, s + 1) / 2;
+    raster::draw_text_centred(img, std::max(L.left + L.plot_width / 2, half + 2 * s), 6 * s, title, kBlack, s + 1);
+  }
   if (bar) draw_colour_bar(img, L.left + L.plot_width + 1, L.top, L.plot_height, c, s);
 }
 
