@@ -1,0 +1,149 @@
+// `authalic flatten` and `authalic metrics` (issue 3) on fsaverage5 and the phantom: the outputs'
+// layout and units, the accuracy requirements on B1, the cross-check of `metrics` against
+// ../shared/tools/evalmap.py, determinism across thread counts, and clear refusals.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "common/test_data.h"
+#include "core/mesh.h"
+#include "io/image_io.h"
+#include "io/surface_io.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using authalic::test::authalic_binary;
+using authalic::test::run_command;
+
+nlohmann::json read_json(const std::string& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+}  // namespace
+
+TEST(FlattenCli, B1MeetsTheRequirementsAndKeepsTheInputsVertices) {
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(flat, "fsaverage5/flat_left.gii.gz");
+  const std::string dir = authalic::test::temp_dir("flatten_b1");
+  const std::string out = dir + "/lh.flat.surf.gii", uv = dir + "/lh.uv.surf.gii", m = dir + "/m.json";
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " flatten " + white + " " + out + " --faces-from " + flat + " --uv " + uv +
+                            " --metrics " + m + " --png " + dir + "/flat.png --histogram " + dir + "/hist.png --fs-patch " +
+                            dir + "/lh.flat.patch -q",
+                        &output),
+            0)
+      << output;
+  const auto j = read_json(m);
+  const auto& mm = j.at("metrics");
+  // Issue 3 requirements on B1.
+  EXPECT_EQ(mm.at("flips"), 0);
+  EXPECT_LE(mm.at("element_cv").get<double>(), 0.01);
+  EXPECT_LE(mm.at("vertex_ln_area_abs").at("mean").get<double>(), 0.01);
+  EXPECT_LE(mm.at("vertex_ln_area_abs").at("p99").get<double>(), 0.04);
+  EXPECT_LE(mm.at("face_ln_area_abs").at("mean").get<double>(), 0.06);
+  EXPECT_GT(j.at("initial_metrics").at("element_cv").get<double>(), 0.3);  // the conformal start is not
+
+  // Layout: the input's 10,242 vertices first, in order, then the inserted ones; the region's faces.
+  const authalic::io::Surface in = authalic::io::read_surface(white);
+  const authalic::io::Surface o = authalic::io::read_surface(out), u = authalic::io::read_surface(uv);
+  ASSERT_GE(o.mesh.num_vertices(), in.mesh.num_vertices());
+  EXPECT_EQ(o.mesh.num_vertices(), j.at("vertices").get<int>());
+  EXPECT_EQ(j.at("input_vertices"), in.mesh.num_vertices());
+  const int splits = j.at("initial_map").at("edges_split").get<int>() + j.at("initial_map").at("corner_vertices_inserted").get<int>();
+  EXPECT_EQ(o.mesh.num_vertices(), in.mesh.num_vertices() + splits);
+  EXPECT_GE(o.mesh.num_faces(), 18654);  // flat_left's faces, split ones replaced by their pieces
+  EXPECT_LE(o.mesh.num_faces(), 18654 + 3 * splits);
+  // uv in the unit square; the flat surface in mm with the cortex's area.
+  EXPECT_GE(u.mesh.V.leftCols(2).minCoeff(), 0.0);
+  EXPECT_LE(u.mesh.V.leftCols(2).maxCoeff(), 1.0);
+  const double flat_area = authalic::signed_face_areas_2d(o.mesh.V, o.mesh.F).sum();
+  EXPECT_NEAR(flat_area, j.at("cortical_area_mm2").get<double>(), 1e-3 * flat_area);
+  EXPECT_NEAR(j.at("cortical_area_mm2").get<double>(), 60424, 100);  // fsaverage5 left cortex patch
+  // The orientation rule: the frontal pole (most anterior vertex) is near the top middle.
+  const int pole = j.at("anterior_vertex").get<int>();
+  EXPECT_NEAR(u.mesh.V(pole, 0), 0.5, 0.1);
+  EXPECT_GT(u.mesh.V(pole, 1), 0.9);
+  // Pictures and the FreeSurfer patch.
+  EXPECT_GT(authalic::io::read_png(dir + "/flat.png").width, 200);
+  EXPECT_GT(authalic::io::read_png(dir + "/hist.png").width, 200);
+  const authalic::io::Patch p = authalic::io::read_freesurfer_patch(dir + "/lh.flat.patch");
+  EXPECT_EQ(p.vertices.size(), 9465u);  // the region's input vertices
+}
+
+TEST(MetricsCli, AgreesWithTheIndependentEvalmap) {
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(flat, "fsaverage5/flat_left.gii.gz");
+  const std::string evalmap = authalic::test::shared_data("../tools/evalmap.py");
+  if (evalmap.empty() || run_command("/usr/bin/python3 -c 'import nibabel, numpy'") != 0) {
+    if (authalic::test::running_in_ci()) FAIL() << "evalmap.py or python3-nibabel missing under CI=true";
+    GTEST_SKIP() << "evalmap.py or python3-nibabel not available";
+  }
+  const std::string dir = authalic::test::temp_dir("metrics_evalmap");
+  ASSERT_EQ(run_command(authalic_binary() + " flatten " + white + " " + dir + "/o.surf.gii --faces-from " + flat +
+                        " --uv " + dir + "/uv.surf.gii --initial " + dir + "/init.surf.gii -q"),
+            0);
+  for (const std::string map : {"uv", "init"}) {
+    const std::string path = dir + "/" + map + ".surf.gii";
+    ASSERT_EQ(run_command(authalic_binary() + " metrics " + white + " " + path + " --json > " + dir + "/a.json"), 0);
+    ASSERT_EQ(run_command("/usr/bin/python3 " + evalmap + " " + white + " " + path + " --domain square --k 32 --json > " + dir +
+                          "/e.json"),
+              0);
+    const auto a = read_json(dir + "/a.json"), e = read_json(dir + "/e.json");
+    // Same faces (both skip the faces on inserted vertices), same definitions.
+    EXPECT_EQ(a.at("faces"), e.at("faces")) << map;
+    EXPECT_EQ(a.at("flips"), e.at("flips")) << map;
+    EXPECT_NEAR(a.at("face_ln_area_abs").at("mean").get<double>(), e.at("ln_area_ratio_abs_mean").get<double>(), 1e-6) << map;
+    EXPECT_NEAR(a.at("face_ln_area_abs").at("p95").get<double>(), e.at("ln_area_ratio_abs_p95").get<double>(), 1e-4) << map;
+    EXPECT_NEAR(a.at("lambda").at("mean").get<double>(), e.at("qc_lambda_mean").get<double>(), 1e-6) << map;
+    // Element areas: exact clipping here, 4M-sample Monte Carlo there (its own CV noise ~0.007).
+    const double ca = a.at("element_cv").get<double>(), ce = e.at("element_area_cv").get<double>();
+    EXPECT_NEAR(std::sqrt(std::max(0.0, ce * ce - ca * ca)), 0.0, 0.012) << map << ": ours " << ca << ", evalmap " << ce;
+    EXPECT_GE(ce, ca - 0.002) << map;
+  }
+}
+
+TEST(FlattenCli, SameBytesForOneAndTwoThreads) {
+  const std::string src = AUTHALIC_SOURCE_DIR;
+  const std::string dir = authalic::test::temp_dir("flatten_threads");
+  const std::string args = " flatten " + src + "/sample_data/surf/lh.white " + " --label " + src +
+                           "/sample_data/label/lh.cortex.label -q ";
+  ASSERT_EQ(run_command(authalic_binary() + args + dir + "/a.surf.gii --threads 1"), 0);
+  ASSERT_EQ(run_command(authalic_binary() + args + dir + "/b.surf.gii --threads 2"), 0);
+  const std::string a = slurp(dir + "/a.surf.gii"), b = slurp(dir + "/b.surf.gii");
+  ASSERT_FALSE(a.empty());
+  EXPECT_EQ(a, b);
+}
+
+TEST(FlattenCli, RefusesAClosedSurfaceWithoutARegionAndWritesNothing) {
+  const std::string src = AUTHALIC_SOURCE_DIR;
+  const std::string dir = authalic::test::temp_dir("flatten_closed");
+  std::string output;
+  EXPECT_EQ(run_command(authalic_binary() + " flatten " + src + "/sample_data/surf/lh.white " + dir + "/o.surf.gii", &output), 2);
+  EXPECT_NE(output.find("closed surface"), std::string::npos) << output;
+  EXPECT_NE(output.find("--label"), std::string::npos) << output;
+  EXPECT_NE(output.find("sphere"), std::string::npos) << output;
+  EXPECT_TRUE(fs::is_empty(dir)) << "no partial output";
+}
+
+TEST(FlattenCli, RefusesAFaceSetOnOtherVertices) {
+  AUTHALIC_REQUIRE_SHARED(flat, "fsaverage5/flat_left.gii.gz");
+  const std::string src = AUTHALIC_SOURCE_DIR;
+  const std::string dir = authalic::test::temp_dir("flatten_mismatch");
+  std::string output;
+  EXPECT_EQ(run_command(authalic_binary() + " flatten " + src + "/sample_data/surf/lh.white " + dir + "/o.surf.gii --faces-from " +
+                            flat,
+                        &output),
+            2);
+  EXPECT_NE(output.find("same vertices"), std::string::npos) << output;
+  EXPECT_TRUE(fs::is_empty(dir));
+}
