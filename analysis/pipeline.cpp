@@ -21,6 +21,7 @@
 #include "core/conformal_map.h"
 #include "core/error.h"
 #include "core/metrics.h"
+#include "core/rectangle_map.h"
 #include "core/square_map.h"
 #include "core/version.h"
 #include "io/atomic_file.h"
@@ -51,7 +52,7 @@ class StepLog {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     summary.step_seconds.emplace_back(name_, s);
     std::ostringstream line;
-    line << std::left << std::setw(34) << name_ << std::right << std::fixed << std::setprecision(3) << s << " s";
+    line << std::left << std::setw(44) << name_ << std::right << std::fixed << std::setprecision(3) << s << " s";
     lines_.push_back(line.str());
     for (const auto& n : notes_) lines_.push_back("  " + n);
     notes_.clear();
@@ -251,6 +252,27 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     log.end(summary);
   }
 
+  // 2b. The whole brain on the 1:2 rectangle: the two hemispheres side by side, each part's width
+  // proportional to its cortical area (core/rectangle_map.h, form b).
+  HemisphereRectangles rect;
+  MapMetrics rect_metrics;
+  if (options.rectangle) {
+    log.begin("authalic 1:2 rectangle (both hemispheres)");
+    rect = hemisphere_rectangle_map(TriMesh{hemis[0].white.mesh.V, hemis[0].cortex_faces},
+                                    TriMesh{hemis[1].white.mesh.V, hemis[1].cortex_faces}, RectangleMapOptions{}, progress);
+    const Eigen::Index nl = rect.left.V.rows();
+    MatrixXd V(nl + rect.right.V.rows(), 3), UV(nl + rect.right.V.rows(), 2);
+    V << rect.left.V, rect.right.V;
+    UV << rect.left.UV, rect.right.UV;
+    MatrixXi F(rect.left.F.rows() + rect.right.F.rows(), 3);
+    F << rect.left.F, (rect.right.F.array() + static_cast<int>(nl)).matrix();
+    rect_metrics = map_metrics(V, UV, F, MapDomain::Rectangle, options.k);
+    log.note("left part width " + std::to_string(rect.split) + " of 2; flips " + std::to_string(rect_metrics.flips) +
+             ", element-area CV " + std::to_string(rect_metrics.element_cv) + " (" + std::to_string(2 * options.k) + "x" +
+             std::to_string(options.k) + ")");
+    log.end(summary);
+  }
+
   // 3. PET by normal projection from the pial surface inward (Zou et al. 2011, section 5.2).
   log.begin("PET sampling");
   SamplingOptions so;
@@ -347,6 +369,24 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     io::write_surface((stage / flat_name).string(), flat, wo);
     sidecar(flat_name, {{"description", "authalic flat map; square side sqrt(cortical area) mm"},
                         {"metrics", {{"flips", h.metrics.flips}, {"element_area_cv", h.metrics.element_cv}}}});
+    if (options.rectangle) {
+      // This hemisphere's part of the whole-brain 1:2 rectangle, in mm (the rectangle's area equals
+      // both hemispheres' cortical area).
+      const RectanglePart& part = h.left ? rect.left : rect.right;
+      const double total = face_areas(rect.left.V, rect.left.F).sum() + face_areas(rect.right.V, rect.right.F).sum();
+      TriMesh rflat;
+      rflat.V = MatrixXd::Zero(part.UV.rows(), 3);
+      rflat.V.leftCols(2) = part.UV * std::sqrt(total / 2.0);
+      rflat.F = part.F;
+      io::SurfaceWriteOptions ro = wo;
+      ro.metadata["space"] = "authalic whole-brain 1:2 rectangle scaled to the cortical area of both hemispheres (mm)";
+      const std::string rect_name = hp + "_space-authalicrect_flat.surf.gii";
+      io::write_surface((stage / rect_name).string(), rflat, ro);
+      sidecar(rect_name, {{"description", "this hemisphere's part of the whole-brain 1:2 rectangle (left part x in [0, w_L], "
+                                          "right part [w_L, 2] before scaling by sqrt(total cortical area / 2) mm)"},
+                          {"metrics", {{"flips", rect_metrics.flips}, {"element_area_cv", rect_metrics.element_cv},
+                                       {"element_grid", {2 * options.k, options.k}}, {"left_part_width", rect.split}}}});
+    }
     io::FuncWriteOptions fo;
     fo.column_names = {"pet"};
     fo.anatomical_structure = wo.anatomical_structure;

@@ -104,6 +104,8 @@ const bool registered = register_command({70, [](CLI::App& parent) {
                   "Intensity normalisation: none, global (cortical mean), or a reference-region mask NIfTI (SUVR)");
   sub->add_option("--threshold", a->options.z_threshold, "|z| at or beyond which an element is abnormal (default 2)");
   sub->add_flag("--no-report", [a](std::int64_t) { a->options.report = false; }, "Skip report.html");
+  sub->add_flag("--no-rectangle", [a](std::int64_t) { a->options.rectangle = false; },
+                "Skip the whole-brain 1:2 rectangle map (sub-<id>_hemi-?_space-authalicrect_flat.surf.gii)");
   add_common_options(*sub);
   sub->callback([a]() { set_exit_code(run(*a)); });
 }});
