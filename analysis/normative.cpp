@@ -369,6 +369,7 @@ Comparison compare_to_reference(const NormativeReference& ref, const ElementTabl
   if (!(options.threshold > 0)) throw InputError("--threshold: must be > 0 (|z| flagged as abnormal)");
   Comparison out;
   out.threshold = options.threshold;
+  out.predictive = options.predictive;
   out.patient_age = std::isfinite(options.age) ? options.age : patient.age;
   out.age_adjusted = options.use_age && ref.age_model && std::isfinite(out.patient_age);
   if (options.use_age && ref.age_model && !std::isfinite(out.patient_age))
@@ -389,13 +390,17 @@ Comparison compare_to_reference(const NormativeReference& ref, const ElementTabl
     const double n = ref.n[i];
     if (n < min_n) continue;
     double expected = ref.mean[i], sd = ref.sd(static_cast<int>(i));
+    double inflation = 1 + 1 / n;  // predictive: the uncertainty of the reference mean
     if (out.age_adjusted && ref.age_m2[i] > 0) {
       // Least-squares line in age; SD of the residuals (n - 2 degrees of freedom).
       const double beta = ref.comoment[i] / ref.age_m2[i];
-      expected = ref.mean[i] + beta * (out.patient_age - ref.age_mean[i]);
+      const double da = out.patient_age - ref.age_mean[i];
+      expected = ref.mean[i] + beta * da;
       const double ss = std::max(0.0, ref.m2[i] - ref.comoment[i] * beta);
       sd = std::sqrt(ss / (n - 2));
+      inflation += da * da / ref.age_m2[i];  // and of the slope
     }
+    if (options.predictive) sd *= std::sqrt(inflation);
     out.expected[i] = expected;
     out.sd[i] = sd;
     if (!std::isfinite(y) || !(sd > 0)) continue;
@@ -472,7 +477,12 @@ std::string comparison_summary_json(const NormativeReference& ref, const std::st
   j["format"] = "authalic-comparison";
   j["version"] = 1;
   j["software"] = software_string();
-  j["z_definition"] = "z = (patient - expected) / SD; hypometabolism is negative (NEUROSTAT/3D-SSP report the opposite sign)";
+  j["z_definition"] = std::string("z = (patient - expected) / SD") +
+                      (cmp.predictive ? ", SD = predictive SD of a new control (reference SD x sqrt(1 + 1/n [+ (age - mean age)^2 / "
+                                        "sum of squared age deviations]))"
+                                      : ", SD = reference SD (residual SD with the age model)") +
+                      "; hypometabolism is negative (NEUROSTAT/3D-SSP report the opposite sign)";
+  j["predictive_sd"] = cmp.predictive;
   j["reference"] = {{"path", reference_path},
                     {"num_subjects", ref.subjects.size()},
                     {"domain", to_string(ref.grid.domain)},

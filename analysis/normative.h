@@ -21,7 +21,8 @@
 // Sign convention. z = (patient - expected) / SD, so hypometabolism gives negative z and an
 // element is flagged abnormal at z <= -threshold (hypo) or z >= +threshold (hyper). NEUROSTAT/3D-SSP
 // report the opposite sign, (normal mean - patient) / SD, as a positive "decrease" z; negate ours
-// to compare with them.
+// to compare with them. SD is by default the predictive SD of a new control (CompareOptions::
+// predictive), slightly larger than the reference SD for small references.
 //
 // File format (JSON, versioned; see reference_to_json for every field):
 //   {"format": "authalic-normative-reference", "version": 1, "software": "authalic 0.1.0 (rev)",
@@ -94,6 +95,14 @@ struct CompareOptions {
   bool use_age = true;           // use the age model when the reference has one and the age is known
   double age = std::numeric_limits<double>::quiet_NaN();  // patient's age (years); NaN = from the table
   int min_subjects = 3;          // elements with fewer controls get no z
+  // SD of the comparison. true: the predictive SD of a new control's value, the reference SD times
+  // sqrt(1 + 1/n), with the age model the residual SD times sqrt(1 + 1/n + (age - mean age)^2 /
+  // sum of squared age deviations) (the single case against a control sample: Crawford & Howell
+  // 1998, Crawford & Garthwaite 2006). It accounts for the reference's own uncertainty, so that a
+  // healthy subject has ~5 % of elements at |z| >= 2 also with ~20 controls (the plain SD flags
+  // more: 6.4 % in the sample phantom's leave-one-out, 4.9 % with the predictive SD). false: the
+  // plain reference SD (NEUROSTAT/3D-SSP), nearly the same for large references.
+  bool predictive = true;
 };
 
 struct ElementCluster {
@@ -111,11 +120,12 @@ struct ElementCluster {
 
 struct Comparison {
   // Per value (blocks x elements, as NormativeReference):
-  std::vector<double> z, expected, sd;
+  std::vector<double> z, expected, sd;  // sd: the SD z is measured in
   std::vector<int> flag;         // -1 hypo, +1 hyper, 0 normal or no z
   std::vector<int> cluster;      // cluster id, 0 = none
   std::vector<ElementCluster> clusters;  // by size (elements) descending, then |peak z|, then position
   bool age_adjusted = false;
+  bool predictive = true;        // sd is the predictive SD (CompareOptions::predictive)
   double patient_age = std::numeric_limits<double>::quiet_NaN();
   int num_compared = 0, num_hypo = 0, num_hyper = 0, num_without_z = 0;
   double threshold = 2.0;

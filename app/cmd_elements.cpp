@@ -1,6 +1,10 @@
 // `authalic elements SURFACE MAP VALUES OUT_PREFIX`: equal-area cortical elements of an authalic map
 // (Zou et al. 2011 section 5.2) and their exported images. See analysis/elements.h.
+#include <algorithm>
+#include <array>
 #include <chrono>
+#include <cstdint>
+#include <ctime>
 #include <cmath>
 #include <iostream>
 #include <memory>
@@ -38,6 +42,52 @@ std::map<std::string, std::string> func_metadata(const std::string& path) {
   return io::detail::read_gifti(path).metadata;
 }
 
+// The surface's faces inside the map's region. A map may cover only part of the surface (the
+// cortex of a whole-hemisphere white surface, as `authalic flatten --faces-from/--label` writes it),
+// and tracing the vertices the flattening appended to the edges they split needs the region's own
+// faces: outside it, a split boundary edge would have a second face. Kept: faces whose vertices are
+// all map vertices and that are map faces themselves or were split (an edge of theirs is not an
+// edge of the map); dropped: faces outside, including caps whose three edges are region edges.
+MatrixXi faces_in_map_region(const MatrixXi& F, const MatrixXi& map_F, int num_vertices) {
+  auto edge = [](int u, int w) {
+    return (static_cast<std::uint64_t>(std::min(u, w)) << 32) | static_cast<std::uint32_t>(std::max(u, w));
+  };
+  auto face = [](std::array<int, 3> t) {
+    std::sort(t.begin(), t.end());
+    return std::array<std::int64_t, 2>{(static_cast<std::int64_t>(t[0]) << 32) | static_cast<std::uint32_t>(t[1]), t[2]};
+  };
+  std::vector<std::uint64_t> edges;
+  std::vector<std::array<std::int64_t, 2>> faces;
+  edges.reserve(static_cast<std::size_t>(3 * map_F.rows()));
+  faces.reserve(static_cast<std::size_t>(map_F.rows()));
+  std::vector<char> used(static_cast<std::size_t>(num_vertices), 0);
+  for (Eigen::Index f = 0; f < map_F.rows(); ++f) {
+    const std::array<int, 3> t{map_F(f, 0), map_F(f, 1), map_F(f, 2)};
+    for (int k = 0; k < 3; ++k) {
+      const int u = t[static_cast<std::size_t>(k)];
+      edges.push_back(edge(u, t[static_cast<std::size_t>((k + 1) % 3)]));
+      if (u >= 0 && u < num_vertices) used[static_cast<std::size_t>(u)] = 1;
+    }
+    faces.push_back(face(t));
+  }
+  std::sort(edges.begin(), edges.end());
+  std::sort(faces.begin(), faces.end());
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const std::array<int, 3> t{F(f, 0), F(f, 1), F(f, 2)};
+    bool inside = true, split = false;
+    for (int k = 0; k < 3; ++k) {
+      const int u = t[static_cast<std::size_t>(k)];
+      if (u < 0 || u >= num_vertices || !used[static_cast<std::size_t>(u)]) inside = false;
+      if (!std::binary_search(edges.begin(), edges.end(), edge(u, t[static_cast<std::size_t>((k + 1) % 3)]))) split = true;
+    }
+    if (inside && (split || std::binary_search(faces.begin(), faces.end(), face(t)))) keep.push_back(f);
+  }
+  MatrixXi out(static_cast<Eigen::Index>(keep.size()), 3);
+  for (std::size_t i = 0; i < keep.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = F.row(keep[i]);
+  return out;
+}
+
 int run_elements(const ElementsArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   const analysis::ElementDomain domain = analysis::parse_element_domain(a.domain);
@@ -48,10 +98,16 @@ int run_elements(const ElementsArgs& a) {
   const auto meta = func_metadata(a.values);
 
   const auto compute_start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();
   const analysis::ElementMap em =
-      analysis::prepare_element_map(surface.mesh.V, surface.mesh.F, map.mesh.V, map.mesh.F, values, domain, a.map);
+      analysis::prepare_element_map(surface.mesh.V,
+                                    map.mesh.num_vertices() > surface.mesh.num_vertices()  // appended vertices to trace
+                                        ? faces_in_map_region(surface.mesh.F, map.mesh.F, surface.mesh.num_vertices())
+                                        : surface.mesh.F,
+                                    map.mesh.V, map.mesh.F, values, domain, a.map);
   const analysis::ElementResult result = analysis::compute_elements(em, grid, surface.to_scanner);
   const double compute_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - compute_start).count();
+  const double compute_cpu_seconds = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;  // all threads
 
   analysis::ElementTable table;
   table.grid = grid;
@@ -105,6 +161,7 @@ int run_elements(const ElementsArgs& a) {
                     {"png", paths.png},   {"png_3d", paths.png_3d},   {"label", paths.label}};
     j["notes"] = em.notes;
     j["elements_seconds"] = compute_seconds;
+    j["elements_cpu_seconds"] = compute_cpu_seconds;
     j["seconds"] = seconds;
     std::cout << j.dump(2) << '\n';
   }

@@ -2,6 +2,7 @@
 // control subjects, exact merging of partial references, and a patient's z-scores and clusters.
 // See analysis/normative.h.
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -33,10 +34,15 @@ struct CompareArgs {
   std::vector<std::string> labels;
   double age = std::nan("");
   bool no_age = false;
+  bool plain_sd = false;
   int min_subjects = 3;
 };
 
-void print_reference_summary(const analysis::NormativeReference& r, const std::string& path, double seconds) {
+// CPU seconds of all threads since `start`: the command's cost on an idle machine.
+double cpu_seconds_since(std::clock_t start) { return double(std::clock() - start) / CLOCKS_PER_SEC; }
+
+void print_reference_summary(const analysis::NormativeReference& r, const std::string& path, double seconds,
+                             double cpu_seconds) {
   info("authalic normative: " + path + ": " + std::to_string(r.subjects.size()) + " subjects, " + to_string(r.grid.domain) +
        " K = " + std::to_string(r.grid.k) + ", " + std::to_string(r.hemispheres.size()) + " hemisphere block(s), normalisation " +
        r.normalisation + (r.age_model ? ", age model" : ", no age model"));
@@ -51,12 +57,14 @@ void print_reference_summary(const analysis::NormativeReference& r, const std::s
     j["units"] = r.units;
     j["age_model"] = r.age_model;
     j["seconds"] = seconds;
+    j["cpu_seconds"] = cpu_seconds;
     std::cout << j.dump(2) << '\n';
   }
 }
 
 int run_build(const BuildArgs& a) {
   const auto start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();
   std::vector<std::string> tables = a.tables;
   if (!a.list.empty()) {
     std::ifstream in(a.list);
@@ -70,29 +78,34 @@ int run_build(const BuildArgs& a) {
   if (tables.empty()) throw InputError("normative build: no element table given; list the controls' *_elements.csv files");
   const auto ref = analysis::build_reference(tables, terminal_progress());
   analysis::write_reference(a.out, ref);
-  print_reference_summary(ref, a.out, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  print_reference_summary(ref, a.out, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                          cpu_seconds_since(cpu_start));
   return 0;
 }
 
 int run_merge(const MergeArgs& a) {
   const auto start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();
   if (a.inputs.empty()) throw InputError("normative merge: no reference given");
   analysis::NormativeReference r = analysis::read_reference(a.inputs[0]);
   for (std::size_t i = 1; i < a.inputs.size(); ++i)
     r = analysis::merge_references(r, analysis::read_reference(a.inputs[i]), "the merged references", a.inputs[i]);
   analysis::write_reference(a.out, r);
-  print_reference_summary(r, a.out, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  print_reference_summary(r, a.out, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                          cpu_seconds_since(cpu_start));
   return 0;
 }
 
 int run_compare(const CompareArgs& a) {
   const auto start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();
   const analysis::NormativeReference ref = analysis::read_reference(a.reference);
   const analysis::ElementTable patient = analysis::read_element_table(a.patient);
   analysis::CompareOptions o;
   o.threshold = a.threshold;
   o.age = a.age;
   o.use_age = !a.no_age;
+  o.predictive = !a.plain_sd;
   o.min_subjects = a.min_subjects;
   const analysis::Comparison cmp = analysis::compare_to_reference(ref, patient, o);
   if (!a.labels.empty() && a.labels.size() != ref.hemispheres.size())
@@ -124,6 +137,7 @@ int run_compare(const CompareArgs& a) {
   if (global_options().json) {
     auto j = nlohmann::json::parse(analysis::comparison_summary_json(ref, a.reference, patient, a.patient, cmp, paths));
     j["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    j["cpu_seconds"] = cpu_seconds_since(cpu_start);
     std::cout << j.dump(2) << '\n';
   }
   return 0;
@@ -167,6 +181,9 @@ const bool registered = register_command({50, [](CLI::App& parent) {
                       "reference's order, for per-vertex z");
   compare->add_option("--age", c->age, "Patient's age in years (default: from the table)");
   compare->add_flag("--no-age", c->no_age, "Ignore the reference's age model");
+  compare->add_flag("--plain-sd", c->plain_sd,
+                    "z in units of the reference SD itself (NEUROSTAT/3D-SSP) instead of the predictive SD of a new control "
+                    "(SD x sqrt(1 + 1/n [+ age term]); default, calibrated for small references)");
   compare->add_option("--min-subjects", c->min_subjects, "Elements with fewer controls get no z")
       ->check(CLI::Range(2, 1000000))
       ->capture_default_str();

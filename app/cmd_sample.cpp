@@ -1,6 +1,7 @@
 // `authalic sample VOLUME SURFACE OUT.func.gii`: PET on the cortex (normal projection, ribbon or
 // vertex values), optionally normalised, as GIFTI func plus a PNG. See analysis/sampling.h.
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -85,6 +86,7 @@ int run_sample(const SampleArgs& a) {
   so.statistic = a.stat == "max" ? analysis::SamplingStatistic::Max : analysis::SamplingStatistic::Mean;
   analysis::SamplingResult result;
   const auto sampling_start = std::chrono::steady_clock::now();
+  const std::clock_t sampling_cpu_start = std::clock();
   if (a.trilinear) {
     result = analysis::sample_at_vertices(volume, V_world, surface.mesh.F, so);
   } else if (!a.ribbon.empty()) {
@@ -97,6 +99,8 @@ int run_sample(const SampleArgs& a) {
   }
 
   const double sampling_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sampling_start).count();
+  // CPU time of all threads: the step's cost on an idle machine, whatever the load of a shared one.
+  const double sampling_cpu_seconds = double(std::clock() - sampling_cpu_start) / CLOCKS_PER_SEC;
 
   // Intensity normalisation.
   analysis::Normalisation norm;
@@ -179,6 +183,7 @@ int run_sample(const SampleArgs& a) {
     j["units"] = norm.units;
     j["notes"] = result.notes;
     j["sampling_seconds"] = sampling_seconds;
+    j["sampling_cpu_seconds"] = sampling_cpu_seconds;
     j["seconds"] = seconds;
     std::cout << j.dump(2) << '\n';
   }

@@ -208,8 +208,8 @@ for p in patients:
                 inside += 1; found += zz <= -2
             elif t <= 1e-12:
                 outside += 1; false += abs(zz) >= 2
-    print(f"pat|{p}: {inside} elements fully inside the -25% region|{100*found/inside:.1f}% of them flagged hypo (>= 90%); "
-          f"{100*false/outside:.1f}% of {outside} elements outside flagged (<= 5%)")
+    print(f"pat|{p} vs 20 controls (-25% region)|{found} of {inside} elements fully inside flagged hypo = {100*found/inside:.1f}% "
+          f"(>= 90%); {false} of {outside} elements outside flagged = {100*false/outside:.1f}% (<= 5%)")
 EOF
 )
 while IFS='|' read -r _ name note; do row "$name" "-" "-" "-" "-" "$note"; done <<< "$VALIDATION"

@@ -59,7 +59,20 @@ TEST(Normative, ZScoresEqualHandComputationOnATinyTable) {
   EXPECT_DOUBLE_EQ(ref.sd(1), 0.0);
   EXPECT_DOUBLE_EQ(ref.sd(3), 0.5);
   const ElementTable patient = make_table(ElementDomain::Square, 2, {"left"}, "p", {0.0, 2.0, 5.5, 3.0});
-  const Comparison c = compare_to_reference(ref, patient);
+  // Default: the predictive SD of a new control, SD x sqrt(1 + 1/n) = SD x sqrt(4/3) for n = 3.
+  const Comparison p = compare_to_reference(ref, patient);
+  EXPECT_TRUE(p.predictive);
+  EXPECT_NEAR(p.sd[0], std::sqrt(4.0 / 3.0), 1e-15);
+  EXPECT_NEAR(p.z[0], -2.0 / std::sqrt(4.0 / 3.0), 1e-15);   // -1.732: not flagged
+  EXPECT_TRUE(std::isnan(p.z[1]));
+  EXPECT_NEAR(p.z[2], 1.5 / std::sqrt(4.0 / 3.0), 1e-15);
+  EXPECT_NEAR(p.z[3], -1.5 / (0.5 * std::sqrt(4.0 / 3.0)), 1e-14);  // -2.598
+  EXPECT_EQ(p.flag, (std::vector<int>{0, 0, 0, -1}));
+  // The plain reference SD (NEUROSTAT/3D-SSP).
+  CompareOptions plain;
+  plain.predictive = false;
+  const Comparison c = compare_to_reference(ref, patient, plain);
+  EXPECT_FALSE(c.predictive);
   EXPECT_DOUBLE_EQ(c.z[0], -2.0);   // (0 - 2) / 1: hypometabolic at exactly the threshold
   EXPECT_TRUE(std::isnan(c.z[1]));  // SD 0
   EXPECT_DOUBLE_EQ(c.z[2], 1.5);    // (5.5 - 4) / 1
@@ -77,7 +90,7 @@ TEST(Normative, ZScoresEqualHandComputationOnATinyTable) {
   EXPECT_DOUBLE_EQ(c.clusters[0].mean_z, -2.5);
   EXPECT_EQ(c.cluster, (std::vector<int>{1, 0, 0, 1}));
   // A higher threshold flags only element 3.
-  CompareOptions o;
+  CompareOptions o = plain;
   o.threshold = 2.5;
   EXPECT_EQ(compare_to_reference(ref, patient, o).flag, (std::vector<int>{0, 0, 0, -1}));
 }
@@ -156,18 +169,27 @@ TEST(Normative, AgeModelEqualsDirectLeastSquaresFit) {
   patient.subject_id = "patient";
   patient.age = 71.0;
   patient.blocks[0].elements[e].value = 0.8;
-  const Comparison c = compare_to_reference(ref, patient);
+  CompareOptions plain_sd;
+  plain_sd.predictive = false;
+  const Comparison c = compare_to_reference(ref, patient, plain_sd);
   ASSERT_TRUE(c.age_adjusted);
   const double expected = my + beta * (71.0 - ma);
   EXPECT_NEAR(c.expected[e], expected, 1e-12);
   EXPECT_NEAR(c.sd[e], sd_res, 1e-12);
   EXPECT_NEAR(c.z[e], (0.8 - expected) / sd_res, 1e-9);
+  // Predictive SD of the regression (default): sd_res sqrt(1 + 1/n + (age - mean age)^2 / Saa).
+  const Comparison pred = compare_to_reference(ref, patient);
+  const double sd_pred = sd_res * std::sqrt(1 + 1.0 / 15 + (71.0 - ma) * (71.0 - ma) / saa);
+  EXPECT_NEAR(pred.sd[e], sd_pred, 1e-12);
+  EXPECT_NEAR(pred.z[e], (0.8 - expected) / sd_pred, 1e-9);
   // Without the age model: the plain mean and SD.
-  CompareOptions o;
+  CompareOptions o = plain_sd;
   o.use_age = false;
   const Comparison plain = compare_to_reference(ref, patient, o);
   EXPECT_FALSE(plain.age_adjusted);
   EXPECT_NEAR(plain.z[e], (0.8 - my) / std::sqrt(syy / 14), 1e-9);
+  o.predictive = true;
+  EXPECT_NEAR(compare_to_reference(ref, patient, o).z[e], (0.8 - my) / std::sqrt(syy / 14 * (1 + 1.0 / 15)), 1e-9);
   // A control without an age drops the age model.
   NormativeReference mixed = ref;
   ElementTable ageless = tables[1];

@@ -83,5 +83,61 @@ TEST(ElementsCli, WritesTableImagesAndLabelsWithEqualAreasOnAnIsometricMap) {
   EXPECT_FALSE(std::filesystem::exists(dir + "/bad.csv"));
 }
 
+// Issue 5 on ../shared/data: `authalic flatten` of B1 (fsaverage5 white_left, cortex = the faces of
+// flat_left), then `authalic elements` on its authalic square map gives element areas with
+// CV <= 0.02, and on its conformal initial map (--initial) a CV far above it.
+TEST(ElementsCliRealData, AuthalicSquareMapOfB1HasEqualAreaElementsConformalDoesNot) {
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(flat, "fsaverage5/flat_left.gii.gz");
+  const std::string dir = test::temp_dir("elements_cli_b1");
+  const std::string exe = test::authalic_binary();
+  std::string out;
+  ASSERT_EQ(test::run_command(exe + " flatten " + white + " " + dir + "/flat.surf.gii --faces-from " + flat + " --uv " + dir +
+                                  "/uv.surf.gii --initial " + dir + "/conformal.surf.gii --quiet",
+                              &out),
+            0)
+      << out;
+  const io::Surface surface = io::read_surface(white);
+  io::write_per_vertex(dir + "/y.func.gii", surface.mesh.V.col(1));  // any per-vertex field
+  double cv[2] = {0, 0}, area[2] = {0, 0};
+  const char* maps[2] = {"uv", "conformal"};
+  for (int m = 0; m < 2; ++m) {
+    ASSERT_EQ(test::run_command(exe + " elements " + white + " " + dir + "/" + maps[m] + ".surf.gii " + dir + "/y.func.gii " + dir +
+                                    "/el_" + maps[m] + " --k 32 --json --quiet",
+                                &out),
+              0)
+        << out;
+    const auto j = nlohmann::json::parse(out.substr(out.find('{')));
+    cv[m] = j["element_area_cv"].get<double>();
+    area[m] = j["total_area_mm2"].get<double>();
+  }
+  std::cout << "[ B1 element-area CV at K=32 (authalic flatten + elements): authalic " << cv[0] << ", conformal " << cv[1] << " ]\n";
+  // A linear field's element value is its value at the element's centroid (exact integration),
+  // also next to the boundary, where the flattening appended vertices: they were traced right.
+  const analysis::ElementTable t = analysis::read_element_table(dir + "/el_uv.csv");
+  ASSERT_TRUE(surface.to_scanner.isIdentity());
+  int checked = 0;
+  for (const auto& e : t.blocks[0].elements) {
+    if (!(e.area_mm2 > 0)) continue;
+    EXPECT_NEAR(e.value, e.centroid.y(), 1e-4) << "element " << e.id;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 32 * 32);
+  EXPECT_LE(cv[0], 0.02);
+  EXPECT_GT(cv[1], 0.2);
+  // Both maps carry the whole cortex of flat_left.
+  const io::Surface cortex = io::read_surface(flat);
+  const double expected = face_areas(surface.mesh.V, cortex.mesh.F).sum();
+  EXPECT_NEAR(area[0], expected, 1e-3 * expected);
+  EXPECT_NEAR(area[1], expected, 1e-3 * expected);
+  // The flat surface in mm has the same element areas as the unit-square map (rescaled).
+  ASSERT_EQ(test::run_command(exe + " elements " + white + " " + dir + "/flat.surf.gii " + dir + "/y.func.gii " + dir +
+                                  "/el_mm --k 32 --json --quiet",
+                              &out),
+            0)
+      << out;
+  EXPECT_NEAR(nlohmann::json::parse(out.substr(out.find('{')))["element_area_cv"].get<double>(), cv[0], 2e-3);
+}
+
 }  // namespace
 }  // namespace authalic

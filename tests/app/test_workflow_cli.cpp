@@ -1,0 +1,95 @@
+// Issue 6: the Snakemake workflow (workflow/Snakefile) run with `snakemake -j2` on the phantom
+// cohort (the committed sample_data, 3 controls and 1 patient of it to keep the test short) gives
+// the same normative reference as `authalic normative build` on the same element tables, and the
+// patient's report. Under CI=true a missing snakemake fails the test instead of skipping it.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "analysis/normative.h"
+#include "common/test_data.h"
+
+namespace fs = std::filesystem;
+
+namespace authalic {
+namespace {
+
+const std::string kSample = std::string(AUTHALIC_SOURCE_DIR) + "/sample_data";
+
+TEST(Workflow, SnakemakeOnThePhantomCohortMergesToTheDirectReference) {
+  if (test::run_command("command -v snakemake > /dev/null 2>&1") != 0) {
+    if (test::running_in_ci()) FAIL() << "CI=true but snakemake (Debian package snakemake) is missing";
+    GTEST_SKIP() << "snakemake not installed; skipping the workflow test";
+  }
+  const std::string dir = test::temp_dir("workflow");
+  // A cohort of 3 controls and 1 patient of sample_data, with absolute paths.
+  std::ifstream in(kSample + "/cohort.csv");
+  std::string header, line;
+  std::getline(in, header);
+  std::ostringstream cohort;
+  cohort << header << '\n';
+  int controls = 0, patients = 0;
+  while (std::getline(in, line)) {
+    const bool control = line.find(",control,") != std::string::npos;
+    if (control ? controls >= 3 : patients >= 1) continue;
+    (control ? controls : patients)++;
+    std::stringstream ss(line);
+    std::string field, out;
+    for (int col = 0; std::getline(ss, field, ','); ++col) out += (col ? "," : "") + (col >= 3 ? kSample + "/" + field : field);
+    cohort << out << '\n';
+  }
+  ASSERT_EQ(controls, 3);
+  ASSERT_EQ(patients, 1);
+  std::ofstream(dir + "/cohort.csv") << cohort.str();
+
+  const std::string exe = test::authalic_binary();
+  std::string log;
+  const int rc = test::run_command("snakemake -s " + std::string(AUTHALIC_SOURCE_DIR) + "/workflow/Snakefile -j2 --directory " +
+                                       dir + " --config cohort=" + dir + "/cohort.csv out=" + dir + "/results authalic=" + exe +
+                                       " k=32",
+                                   &log);
+  ASSERT_EQ(rc, 0) << log;
+  const std::string out = dir + "/results";
+  EXPECT_TRUE(fs::exists(out + "/patients/sub-patient01/report.html")) << log;
+  std::vector<std::string> tables;
+  for (const char* id : {"control01", "control02", "control03"}) {
+    tables.push_back(out + "/controls/sub-" + id + "/sub-" + id + "_elements.csv");
+    ASSERT_TRUE(fs::exists(tables.back())) << log;
+    EXPECT_TRUE(fs::exists(out + "/partials/" + id + ".json"));
+  }
+
+  std::string args;
+  for (const auto& t : tables) args += " " + t;
+  ASSERT_EQ(test::run_command(exe + " normative build " + dir + "/direct.json" + args + " --quiet", &log), 0) << log;
+  const auto merged = analysis::read_reference(out + "/normative.json");
+  const auto direct = analysis::read_reference(dir + "/direct.json");
+  ASSERT_EQ(merged.num_values(), direct.num_values());
+  EXPECT_EQ(merged.num_values(), 2 * 32 * 32);
+  EXPECT_EQ(merged.hemispheres, direct.hemispheres);
+  EXPECT_EQ(merged.normalisation, direct.normalisation);
+  EXPECT_EQ(merged.age_model, direct.age_model);
+  ASSERT_EQ(merged.subjects.size(), 3u);
+  for (std::size_t s = 0; s < 3; ++s) {
+    EXPECT_EQ(merged.subjects[s].id, direct.subjects[s].id);
+    EXPECT_EQ(merged.subjects[s].age, direct.subjects[s].age);
+  }
+  // Equal up to floating-point reassociation (Chan et al. pairwise merge vs Welford).
+  auto near = [](double a, double b, double scale) { return std::abs(a - b) <= 1e-12 * scale; };
+  for (int e = 0; e < merged.num_values(); ++e) {
+    const auto i = static_cast<std::size_t>(e);
+    ASSERT_EQ(merged.n[i], direct.n[i]) << "element " << e;
+    ASSERT_EQ(merged.n[i], 3) << "element " << e;
+    EXPECT_TRUE(near(merged.mean[i], direct.mean[i], std::abs(direct.mean[i]))) << "element " << e;
+    EXPECT_TRUE(near(merged.m2[i], direct.m2[i], direct.mean[i] * direct.mean[i])) << "element " << e;
+    if (direct.age_model) {
+      EXPECT_TRUE(near(merged.age_mean[i], direct.age_mean[i], direct.age_mean[i])) << "element " << e;
+      EXPECT_TRUE(near(merged.age_m2[i], direct.age_m2[i], direct.age_mean[i] * direct.age_mean[i])) << "element " << e;
+      EXPECT_TRUE(near(merged.comoment[i], direct.comoment[i], direct.age_mean[i] * std::abs(direct.mean[i]))) << "element " << e;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace authalic
