@@ -69,10 +69,27 @@ double default_step(const io::Volume& volume, const SamplingOptions& options) {
   return half_voxel;
 }
 
-void finish(SamplingResult& r) {
+// Counts NaN vertices; refuses a result with no usable value (issue 8: an all-NaN or all-zero PET
+// would otherwise give maps of nothing without a word).
+void finish(SamplingResult& r, const io::Volume& volume) {
   r.nan_vertices = 0;
-  for (Eigen::Index v = 0; v < r.values.size(); ++v)
+  int finite = 0, nonzero = 0;
+  for (Eigen::Index v = 0; v < r.values.size(); ++v) {
     if (std::isnan(r.values(v))) ++r.nan_vertices;
+    if (std::isfinite(r.values(v))) ++finite, nonzero += r.values(v) != 0;
+  }
+  if (r.vertices_checked > 0 && finite == 0)
+    throw InputError(volume_name(volume) + ": no finite value could be sampled at any of the surface's " +
+                     std::to_string(r.vertices_checked) +
+                     " vertices (the voxels there are NaN); check the PET file and its registration to the surface");
+  if (finite > 0 && nonzero == 0)
+    throw InputError(volume_name(volume) + ": every value sampled at the surface's " + std::to_string(finite) +
+                     " vertices is 0 (an empty or all-zero PET?); check the PET file");
+  // NaN vertices among those used, beyond the ones outside the field of view (noted already).
+  const int nan_inside = r.nan_vertices - (static_cast<int>(r.values.size()) - r.vertices_checked) - r.vertices_outside;
+  if (nan_inside > 0)
+    r.notes.push_back(std::to_string(nan_inside) + " vertices have no finite value (NaN voxels); they are NaN in the "
+                      "output and left out of means");
 }
 
 std::string stat_name(SamplingStatistic s) { return s == SamplingStatistic::Mean ? "mean" : "max"; }
@@ -256,7 +273,7 @@ SamplingResult sample_normal_projection(const io::Volume& volume, const MatrixXd
   r.method = std::string("normal projection, ") + (options.outward ? "outward" : "inward (inverse normal)") + ", depth " +
              format_number(options.depth_mm) + " mm, step " + format_number(r.step_mm) + " mm, " +
              std::to_string(r.samples_per_vertex) + " samples, " + stat_name(options.statistic) + ", trilinear";
-  finish(r);
+  finish(r, volume);
   return r;
 }
 
@@ -295,7 +312,7 @@ SamplingResult sample_ribbon(const io::Volume& volume, const MatrixXd& white_wor
   }
   r.method = "ribbon (white to pial segment), at least " + std::to_string(r.samples_per_vertex) + " samples, step <= " +
              format_number(max_step) + " mm, " + stat_name(options.statistic) + ", trilinear";
-  finish(r);
+  finish(r, volume);
   return r;
 }
 
@@ -311,7 +328,7 @@ SamplingResult sample_at_vertices(const io::Volume& volume, const MatrixXd& V_wo
   for (int v = 0; v < nv; ++v) r.values(v) = sampler(V_world.row(v).head<3>().transpose());
   r.samples_per_vertex = 1;
   r.method = "trilinear value at each vertex";
-  finish(r);
+  finish(r, volume);
   return r;
 }
 

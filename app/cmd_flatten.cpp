@@ -12,6 +12,7 @@
 #include "analysis/report.h"
 #include "app/command.h"
 #include "app/map_json.h"
+#include "app/memory_guard.h"
 #include "core/error.h"
 #include "core/metrics.h"
 #include "core/square_map.h"
@@ -34,6 +35,7 @@ struct FlattenArgs {
   int fixed_steps = 0;
   int iterations = 200;
   bool no_polish = false;
+  double max_memory = -1;  // GB; < 0: 75% of the physical RAM
 };
 
 const char* kOrientationRule =
@@ -125,6 +127,9 @@ void run(const FlattenArgs& a) {
         throw InputError(region_source + ": face " + std::to_string(f) + " refers to vertex " + std::to_string(region(f, c)) +
                          " outside " + a.surface + "; give a face set on the same vertices");
 
+  // A disk has about F / 2 vertices.
+  check_memory(a.surface, (region.rows() + 2) / 2, square_map_memory_bytes((region.rows() + 2) / 2, a.grid), a.max_memory);
+
   SquareMapOptions options;
   options.flow.method = a.method == "mesh" ? FlowMethod::Mesh : FlowMethod::Grid;
   options.flow.grid_resolution = a.grid;
@@ -198,7 +203,7 @@ void run(const FlattenArgs& a) {
                       {"flow", flow_json(r.flow, options.flow)},
                       {"flips", r.flips},
                       {"metrics", metrics_json(final_metrics)},
-                      {"seconds", {{"map", seconds_map}, {"total", seconds}}}};
+                      {"seconds", {{"map", seconds_map}, {"initial_map", r.seconds_initial}, {"flow", r.seconds_flow}, {"total", seconds}}}};
   if (!a.metrics.empty()) {
     j["initial_metrics"] = metrics_json(map_metrics(r.V, r.UV_initial, r.F, MapDomain::Square, a.k));
     write_json_file(a.metrics, j);
@@ -219,7 +224,7 @@ void run(const FlattenArgs& a) {
     std::tie(c.vmin, c.vmax) = analysis::robust_range(c.values);
     analysis::FlatRenderOptions fo;
     fo.grid_cols = fo.grid_rows = a.k;
-    fo.title = "authalic square map, " + std::to_string(a.k) + "x" + std::to_string(a.k) + " equal-area elements";
+    fo.title = "authalic map, " + std::to_string(a.k) + "x" + std::to_string(a.k) + " elements";
     io::write_png(a.png, analysis::render_flat(r.UV, r.F, c, fo));
   }
   if (!a.histogram.empty()) {
@@ -287,6 +292,7 @@ void setup(CLI::App& parent) {
                   "Mesh method with Zou's fixed schedule of K steps (eq. 19) instead of adaptive steps")
       ->check(CLI::Range(0, 100000));
   sub->add_flag("--no-polish", a->no_polish, "Skip the final per-vertex Gauss-Newton polish (grid method)");
+  add_max_memory_option(*sub, &a->max_memory);
   add_common_options(*sub);
   sub->callback([a]() { run(*a); });
 }

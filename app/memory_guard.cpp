@@ -1,0 +1,68 @@
+// Memory guard: estimates of the peak memory of the maps and the --max-memory check.
+#include "app/memory_guard.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "core/error.h"
+
+namespace authalic::app {
+
+namespace {
+
+// Peak resident set size measured with /usr/bin/time -v (Release build, 2 cores; docs/robustness.md,
+// "Memory"). Square map (`authalic flatten`, region vertices n):
+//   B1 (n = 9,465) 69.6 MB, B3 (149,233) 316.2 MB, B4 = B1 subdivided 3 times (596,929) 2,360.7 MB:
+//   superlinear (sparse factor fill-in), fitted by 70 MB + 5.7 n^1.5 bytes; used: 70 MB + 6.0 n^1.5.
+// Sphere map (`authalic sphere`): S1 (10,242) 82.3 MB, S3 (163,842) 270.9 MB, S4 (655,362) 770.1 MB:
+//   at most 70 MB + 1,228 bytes/vertex; used: 90 MB + 1,550 bytes/vertex.
+constexpr double kSquareFixed = 70e6;        // bytes: executable, libraries, grid fields at 512^2
+constexpr double kSquarePerVertex15 = 6.0;   // bytes per region vertex^1.5
+constexpr double kSphereFixed = 90e6;
+constexpr double kSpherePerVertex = 1550;
+
+std::string gb(double bytes) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f GB", bytes / 1e9);
+  return buf;
+}
+
+}  // namespace
+
+double physical_memory_bytes() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+  if (pages <= 0 || page <= 0) return 0;
+  return static_cast<double>(pages) * static_cast<double>(page);
+}
+
+double square_map_memory_bytes(long long vertices, int grid_resolution, double width) {
+  // The grid flow keeps ~8 double fields of (W r) x r cells; 512^2 is part of kSquareFixed.
+  const double cells = width * grid_resolution * static_cast<double>(grid_resolution);
+  const double extra_grid = std::max(0.0, cells - 512.0 * 512.0) * 8 * sizeof(double);
+  return kSquareFixed + extra_grid + kSquarePerVertex15 * std::pow(static_cast<double>(vertices), 1.5);
+}
+
+double sphere_map_memory_bytes(long long vertices) { return kSphereFixed + kSpherePerVertex * static_cast<double>(vertices); }
+
+void add_max_memory_option(CLI::App& sub, double* limit_gb) {
+  sub.add_option("--max-memory", *limit_gb,
+                 "Refuse up front (exit 2) when the map's estimated peak memory exceeds this many GB (default: 75% of "
+                 "the physical RAM)")
+      ->check(CLI::PositiveNumber);
+}
+
+void check_memory(const std::string& what, long long vertices, double needed_bytes, double limit_gb) {
+  const double physical = physical_memory_bytes();
+  const bool by_default = !(limit_gb > 0);
+  const double limit = by_default ? 0.75 * physical : limit_gb * 1e9;
+  if (!(limit > 0) || needed_bytes <= limit) return;
+  throw InputError(what + ": the map of " + std::to_string(vertices) + " vertices would need about " + gb(needed_bytes) +
+                   " of memory, more than the limit of " + gb(limit) +
+                   (by_default ? " (75% of the " + gb(physical) + " of RAM)" : std::string(" (--max-memory)")) +
+                   "; use a machine with more memory, raise --max-memory, or map a coarser surface");
+}
+
+}  // namespace authalic::app
