@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <cstdint>
 #include <cstring>
+#include <fstream>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -148,6 +149,17 @@ Volume read_nifti(const std::string& path, const VolumeReadOptions& options) {
     std::lock_guard<std::mutex> lock(nifti_mutex());
     if (nifti_image_load(nim.get()) != 0 || !nim->data)
       fail(path, "could not read the voxel data (truncated or corrupt file)", "the file is incomplete; re-copy or re-create it");
+  }
+  if (nim->datatype == DT_FLOAT32 || nim->datatype == DT_FLOAT64) {
+    // nifti-clib replaces every non-finite float by 0 while loading (FIXED_FLOAT in
+    // nifti_read_buffer), which would turn missing data (NaN voxels) into real zeros: take the
+    // values from the file's bytes instead (`file` is already the uncompressed image).
+    const std::string img = nim->iname ? nim->iname : file;
+    std::ifstream raw_in(img, std::ios::binary);
+    raw_in.seekg(static_cast<std::streamoff>(nim->iname_offset));
+    raw_in.read(static_cast<char*>(nim->data), static_cast<std::streamsize>(nim->nvox * nim->nbyper));
+    if (!raw_in) fail(path, "could not read the voxel data (truncated or corrupt file)", "the file is incomplete; re-copy or re-create it");
+    if (nim->byteorder != nifti_short_order()) nifti_swap_Nbytes(nim->nvox, nim->nbyper, nim->data);
   }
   // scl_slope = 0 means "no scaling" (nifti1.h); NaN slopes are treated the same, as nibabel does.
   double slope = nim->scl_slope, inter = nim->scl_inter;

@@ -259,10 +259,7 @@ TEST(RobustnessCli, AllZeroAndAllNanPetAreRefusedPartlyNanIsNoted) {
 }
 
 TEST(RobustnessCli, NanVoxelsOfNiftiPetStayNan) {
-  GTEST_SKIP() << "known failure: nifti-clib's nifti_image_load (nifti_read_buffer) replaces every non-finite float "
-                  "voxel by 0 while reading, so NaN voxels of a NIfTI PET are sampled as 0 (lowering the means near "
-                  "them) and an all-NaN NIfTI PET is refused as all-zero; io/nifti_io.cpp should take float data "
-                  "from the file's bytes (read_file_maybe_gz) instead";
+  // nifti-clib zeroes non-finite floats while loading; io/nifti_io.cpp re-reads the raw bytes.
   const PetFixture fx("robust-pet-nifti-nan");
   io::Volume v = test::function_volume({50, 60, 40}, test::oblique_radiological_affine(), f);
   v.data[0] = std::nanf("");
