@@ -18,6 +18,7 @@
 #include "core/error.h"
 #include "core/version.h"
 #include "io/image_io.h"
+#include "io/registration.h"
 #include "io/surface_io.h"
 #include "io/volume_io.h"
 
@@ -34,6 +35,7 @@ struct SampleArgs {
   bool outward = false;
   std::string normalize = "none";
   std::string surface_to_volume;
+  std::string register_t1;
   std::string map;
   std::string png;
   int frame = -1;
@@ -59,6 +61,8 @@ int run_sample(const SampleArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   if (a.trilinear && !a.ribbon.empty()) throw InputError("--trilinear and --ribbon: choose one sampling mode");
   if (a.stat != "mean" && a.stat != "max") throw InputError("--stat: '" + a.stat + "' is not mean or max");
+  if (!a.register_t1.empty() && !a.surface_to_volume.empty())
+    throw InputError("--register and --surface-to-volume: give one (the registration computes the transform)");
 
   io::VolumeReadOptions vo;
   vo.frame = a.frame;
@@ -77,6 +81,18 @@ int run_sample(const SampleArgs& a) {
     to_volume = analysis::parse_affine_text(buf.str(), a.surface_to_volume);
     transform_source = a.surface_to_volume;
   }
+  io::RigidRegistration registration;
+  if (!a.register_t1.empty()) {
+    // The surface is in the T1's scanner RAS; the PET is not co-registered: register the PET to the
+    // T1 (rigid, Mattes MI) and carry the surface into the PET's world coordinates.
+    const io::Volume t1 = io::read_volume(a.register_t1);
+    registration = io::register_rigid(t1, volume);
+    to_volume = registration.t1_to_pet * to_volume;
+    transform_source = "rigid registration of " + a.volume + " to " + a.register_t1 + " (ITK v4, Mattes MI, final metric " +
+                       std::to_string(registration.metric) + ", " + registration.stop_condition + ")";
+    info("sample: registered the PET to " + a.register_t1 + ": Mattes MI " + std::to_string(registration.metric) + " after " +
+         std::to_string(registration.iterations) + " iterations; T1 RAS -> PET RAS:\n" + matrix_text(registration.t1_to_pet));
+  }
   const MatrixXd V_world = analysis::transform_points(to_volume, surface.mesh.V);
 
   analysis::SamplingOptions so;
@@ -92,6 +108,7 @@ int run_sample(const SampleArgs& a) {
   } else if (!a.ribbon.empty()) {
     const io::Surface other = io::read_surface(a.ribbon);
     Eigen::Matrix4d other_to_volume = a.surface_to_volume.empty() ? other.to_scanner : to_volume;
+    if (!a.register_t1.empty()) other_to_volume = registration.t1_to_pet * other.to_scanner;
     result = analysis::sample_ribbon(volume, V_world, analysis::transform_points(other_to_volume, other.mesh.V),
                                      surface.mesh.F, so);
   } else {
@@ -221,6 +238,9 @@ const bool registered = register_command({40, [](CLI::App& parent) {
   sub->add_option("--surface-to-volume", a->surface_to_volume,
                   "Text file with a 4x4 matrix (row by row) taking the surface's coordinates to the volume's world (scanner "
                   "RAS mm); default: the surface's own (FreeSurfer c_ras, else identity)");
+  sub->add_option("--register", a->register_t1,
+                  "T1 volume (NIfTI/MGZ) the surface belongs to: rigidly register the PET to it (ITK v4, Mattes mutual "
+                  "information) and sample through that transform; without it the PET is assumed co-registered");
   sub->add_option("--map", a->map, "Flat map of SURFACE (e.g. from `authalic flatten`) for the PNG; default: 3D views");
   sub->add_option("--png", a->png, "PNG path (default: OUT with .png)");
   sub->add_option("--frame", a->frame, "4D PET: the frame to sample (0-based)")->check(CLI::NonNegativeNumber);
