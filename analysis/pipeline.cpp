@@ -27,6 +27,7 @@
 #include "io/atomic_file.h"
 #include "io/checksum.h"
 #include "io/image_io.h"
+#include "io/registration.h"
 #include "io/surface_io.h"
 #include "io/volume_io.h"
 
@@ -202,7 +203,7 @@ json input_checksums(const SubjectInputs& in) {
   json j;
   for (const auto& [key, path] : std::vector<std::pair<std::string, std::string>>{
            {"lh_white", in.lh_white}, {"lh_pial", in.lh_pial}, {"rh_white", in.rh_white}, {"rh_pial", in.rh_pial},
-           {"lh_cortex", in.lh_cortex}, {"rh_cortex", in.rh_cortex}, {"pet", in.pet}, {"normative", in.normative}}) {
+           {"lh_cortex", in.lh_cortex}, {"rh_cortex", in.rh_cortex}, {"pet", in.pet}, {"t1", in.t1}, {"normative", in.normative}}) {
     if (path.empty()) continue;
     j[key] = {{"path", fs::path(path).filename().string()},
               {"sha256", fs::is_directory(path) ? std::string("(folder)") : io::sha256_file(path)}};
@@ -277,8 +278,19 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   log.begin("PET sampling");
   SamplingOptions so;
   so.depth_mm = options.depth_mm;
+  // With a T1, the PET is first registered to it (rigid, Mattes MI): surfaces are in the T1's
+  // scanner RAS, so they reach the PET's world coordinates through the registration.
+  Eigen::Matrix4d t1_to_pet = Eigen::Matrix4d::Identity();
+  if (!in.t1.empty()) {
+    const io::RigidRegistration reg = io::register_rigid(io::read_volume(in.t1), pet);
+    t1_to_pet = reg.t1_to_pet;
+    std::ostringstream m;
+    m << "PET registered to the T1 (ITK v4 rigid, Mattes MI " << reg.metric << ", " << reg.iterations
+      << " iterations); T1 RAS -> PET RAS translation " << t1_to_pet.block<3, 1>(0, 3).transpose() << " mm";
+    log.note(m.str());
+  }
   for (Hemisphere& h : hemis) {
-    const MatrixXd Vw = transform_points(h.pial.to_scanner, h.pial.mesh.V);
+    const MatrixXd Vw = transform_points(t1_to_pet * h.pial.to_scanner, h.pial.mesh.V);
     h.sampling = sample_normal_projection(pet, Vw, h.pial.mesh.F, so);
     h.pet = h.sampling.values;
   }

@@ -92,7 +92,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_option("--subjects-dir", a->subjects_dir, "FreeSurfer SUBJECTS_DIR (instead of the six inputs above)");
   sub->add_option("--subject", a->subject, "FreeSurfer subject name in --subjects-dir");
   sub->add_option("--pet", in.pet, "PET volume registered to the surfaces (NIfTI, MGH/MGZ, DICOM folder); world = scanner RAS");
-  sub->add_option("--t1", in.t1, "T1 MRI the PET is registered to (recorded; registration is `authalic sample --register`)");
+  sub->add_option("--t1", in.t1, "T1 MRI the surfaces belong to: the PET is rigidly registered to it (ITK v4, Mattes mutual information) before sampling; without it the PET is assumed co-registered");
   sub->add_option("--normative", in.normative, "Normative reference (authalic normative build): adds z-scores");
   sub->add_option("--age", in.age, "Age in years (used by references with an age model)");
   sub->add_option("--out", a->options.out_dir, "Output folder; the subject goes to OUT/sub-<id>")->required();
