@@ -6,6 +6,7 @@ extern "C" {
 #include <gifti_io.h>
 }
 #include <Eigen/LU>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -31,6 +32,30 @@ namespace {
 
 constexpr int kIntentPointset = NIFTI_INTENT_POINTSET;  // 1008
 constexpr int kIntentTriangle = NIFTI_INTENT_TRIANGLE;  // 1009
+
+// gifticlib's XML parser reports a parse error on stderr ("** no element found at line N") even at
+// verbosity 0; our own one-line error says what is wrong, so its stderr is silenced while it parses.
+class QuietStderr {
+ public:
+  QuietStderr() : saved_(dup(2)) {
+    std::fflush(stderr);
+    const int devnull = open("/dev/null", O_WRONLY);
+    if (saved_ >= 0 && devnull >= 0) dup2(devnull, 2);
+    if (devnull >= 0) close(devnull);
+  }
+  ~QuietStderr() {
+    std::fflush(stderr);
+    if (saved_ >= 0) {
+      dup2(saved_, 2);
+      close(saved_);
+    }
+  }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+ private:
+  int saved_;
+};
 
 // gifticlib keeps global state (verbosity, buffers); serialise our calls into it.
 std::mutex& gifti_mutex() {
@@ -251,6 +276,7 @@ GiftiContents read_gifti(const std::string& path) {
   {
     std::lock_guard<std::mutex> lock(gifti_mutex());
     gifti_set_verb(0);
+    const QuietStderr quiet;
     gim.reset(gifti_read_image(file.c_str(), 1));
   }
   if (!gim) fail(path, "gifticlib could not parse it (invalid GIFTI XML or data encoding)", "the file is corrupt or not GIFTI");
