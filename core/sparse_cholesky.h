@@ -1,8 +1,8 @@
 #pragma once
-// Sparse symmetric positive definite solves for the map cores: CHOLMOD's supernodal Cholesky with
-// nested-dissection (METIS) ordering, falling back to Eigen's simplicial LDLᵀ when CHOLMOD reports
-// the matrix is not positive definite (e.g. a nearly singular Neumann system). Results do not
-// depend on the OpenMP thread count (Debian's reference BLAS is serial).
+// Sparse symmetric positive definite solves for the map cores: Eigen's simplicial LDLᵀ up to 100k
+// unknowns, CHOLMOD's supernodal Cholesky with nested-dissection (METIS) ordering above (falling
+// back to LDLᵀ if CHOLMOD reports the matrix not positive definite). Results do not depend on the
+// OpenMP thread count (Debian's reference BLAS is serial).
 #include <memory>
 
 #include "core/mesh.h"
