@@ -47,13 +47,15 @@ class CubeSphereGrid {
   std::vector<double> tan_;            // tan of the n+1 grid angles
   std::vector<int> cell_table_;        // first-guess cell of uniform bins of [-1, 1]
   std::vector<unsigned char> diagonal_;  // per cell of a face grid: 0 = (00,11) split, 1 = (10,01)
+  std::vector<double> dual_;           // per face: b x c, c x a, a x b (9 doubles)
 };
 
 struct SphereFlowOptions {
   int grid_cells = 0;        // cube-sphere cells per cube edge; 0 = chosen from the mesh size
   int max_passes = 4;        // Moser passes (each: rasterise, solve, advect)
   int rk4_steps = 0;         // RK4 steps per pass; 0 = chosen from the density range so that
-  double step_length = 3.0;  // ... one step moves a point at most this many background edges
+  double step_length = 6.0;  // ... one step moves a point at most this many background edges
+                             // (3 and 6 agree to 1e-4 in per-face |ln area ratio| on fsaverage5)
   double tolerance = 0.0;    // stop when the background density's max |ln rho| is below this
                              // (0 = run max_passes passes)
 };

@@ -1,6 +1,7 @@
 // Whole-brain rectangle maps: cutting a closed surface open, the inferior-medial landmark rule,
 // and both map forms on small meshes with known answers.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <cmath>
 
@@ -178,4 +179,37 @@ TEST(RectangleMap, ClosedSurfaceFillsTheTwoToOneRectangle) {
   // The part keeps the surface's area (the initial map's splits move no 3D point off its face;
   // measured 0.03% less after them).
   EXPECT_NEAR(face_areas(p.V, p.F).sum(), face_areas(m.V, m.F).sum(), 1e-3 * face_areas(m.V, m.F).sum());
+}
+
+TEST(RectangleMap, DeterministicForOneAndTwoThreads) {
+  // Both forms give bit-identical maps with 1 and 2 OpenMP threads. Form (a) with the sphere-image
+  // initial map, so the sphere map (conformal map, Moser flow) is covered too.
+  TriMesh m = icosphere(3);
+  m.V.col(1) *= 1.5;
+  m.V.col(0).array() -= 2.0;
+  RectangleMapOptions o;
+  o.initial = RectangleInitial::Sphere;
+  // A coarser flow grid keeps the test short; form (a)'s 384 x 192 grid is not a power of two, so
+  // the DCT takes its cosine-matrix path, whose products are large enough for Eigen to run them
+  // on several threads (the cause of a 3e-14 difference before they were split by columns).
+  o.flow.grid_resolution = 192;
+  const TriMesh left = test::folded_patch(12);
+  TriMesh right = left;
+  right.V *= 1.1;
+  right.V.col(0) = -right.V.col(0);
+  right.F.col(1).swap(right.F.col(2));
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const WholeBrainRectangle a1 = whole_brain_rectangle_map(m, o);
+  const HemisphereRectangles b1 = hemisphere_rectangle_map(left, right, o);
+  omp_set_num_threads(2);
+  const WholeBrainRectangle a2 = whole_brain_rectangle_map(m, o);
+  const HemisphereRectangles b2 = hemisphere_rectangle_map(left, right, o);
+  omp_set_num_threads(saved);
+  EXPECT_EQ(a1.initial_used, RectangleInitial::Sphere);
+  EXPECT_EQ(count_flipped(a1.map.UV, a1.map.F), 0);
+  EXPECT_TRUE(a1.map.F == a2.map.F);
+  EXPECT_TRUE(a1.map.UV == a2.map.UV) << "max difference " << (a1.map.UV - a2.map.UV).cwiseAbs().maxCoeff();
+  EXPECT_TRUE(b1.left.UV == b2.left.UV) << "max difference " << (b1.left.UV - b2.left.UV).cwiseAbs().maxCoeff();
+  EXPECT_TRUE(b1.right.UV == b2.right.UV) << "max difference " << (b1.right.UV - b2.right.UV).cwiseAbs().maxCoeff();
 }
