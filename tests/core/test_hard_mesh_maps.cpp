@@ -25,25 +25,10 @@ namespace {
 
 // ---- closed fixtures for the sphere map ----------------------------------------------------
 
-// Icosahedron subdivided `levels` times, on the unit sphere, outward faces.
-TriMesh unit_icosphere(int levels) {
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  TriMesh m;
-  m.V.resize(12, 3);
-  m.V << -1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, 0, 0, -1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, t, 0, -1, t, 0, 1, -t, 0, -1, -t,
-      0, 1;
-  m.F.resize(20, 3);
-  m.F << 0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3, 9, 4, 3, 4, 2,
-      3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1;
-  m = subdivide_midpoint(m, levels);
-  for (Eigen::Index i = 0; i < m.V.rows(); ++i) m.V.row(i).normalize();
-  return m;
-}
-
 // Vertices crowded toward one side by the ball's hyperbolic translation with |a| = 0.7: the
 // triangle areas then span about 1:1000 (density ratio ((1 + |a|) / (1 - |a|))^4 ~ 1000).
 TriMesh uneven_sphere(int levels = 4) {
-  TriMesh m = unit_icosphere(levels);
+  TriMesh m = icosphere(levels);
   const Eigen::Vector3d a(0.0, 0.0, 0.7);
   for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
     const Eigen::Vector3d d = m.V.row(i).transpose() - a;
@@ -55,7 +40,7 @@ TriMesh uneven_sphere(int levels = 4) {
 // A sphere with a long thin finger (length 3 radii, width ~0.15 rad) at the north pole: the
 // conformal factor of the finger's tip is orders of magnitude below the rest.
 TriMesh finger_sphere(int levels = 4, double length = 3.0) {
-  TriMesh m = unit_icosphere(levels);
+  TriMesh m = icosphere(levels);
   const Eigen::Vector3d pole = m.V.row(0).transpose();  // an icosahedron vertex
   for (Eigen::Index i = 0; i < m.V.rows(); ++i) {
     const double ang = std::acos(std::clamp(m.V.row(i).dot(pole.transpose()), -1.0, 1.0));
@@ -66,7 +51,7 @@ TriMesh finger_sphere(int levels = 4, double length = 3.0) {
 
 // Radial Gaussian noise of `sigma` (fraction of the mean edge length, ~0.04 at level 4).
 TriMesh noisy_sphere(int levels = 4, double sigma = 0.3, unsigned seed = 11) {
-  TriMesh m = unit_icosphere(levels);
+  TriMesh m = icosphere(levels);
   std::mt19937 rng(seed);
   std::normal_distribution<double> g(0.0, sigma * 0.04 * std::pow(2.0, 4 - levels));
   for (Eigen::Index i = 0; i < m.V.rows(); ++i) m.V.row(i) *= 1.0 + g(rng);
@@ -76,7 +61,7 @@ TriMesh noisy_sphere(int levels = 4, double sigma = 0.3, unsigned seed = 11) {
 // Every 7th face (a, b, c) is split at p = midpoint(a, b) + 0.002 (c - midpoint): the new face
 // (a, b, p) has angles of ~0.2 degrees at a and b and ~180 degrees at p (needles and caps).
 TriMesh sliver_sphere(int levels = 3) {
-  const TriMesh m0 = unit_icosphere(levels);
+  const TriMesh m0 = icosphere(levels);
   TriMesh m;
   std::vector<Eigen::RowVector3d> V;
   std::vector<Eigen::RowVector3i> F;
@@ -366,7 +351,7 @@ TEST(HardMeshMaps, SphereMapOfValidHardMeshesIsCorrect) {
 }
 
 TEST(HardMeshMaps, SphereMapRefusesWrongTopologyWithTheMeasuredTopology) {
-  const TriMesh s = unit_icosphere(2);
+  const TriMesh s = icosphere(2);
   TriMesh two;
   two.V.resize(2 * s.V.rows(), 3);
   two.V << s.V, (s.V.rowwise() + Eigen::RowVector3d(3, 0, 0));

@@ -14,23 +14,10 @@
 #include "core/sphere_map.h"
 
 using namespace authalic;
+using authalic::test::icosphere;
 
 namespace {
 
-// Icosphere: icosahedron subdivided `levels` times, vertices on the unit sphere, outward faces.
-TriMesh icosphere(int levels) {
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  TriMesh m;
-  m.V.resize(12, 3);
-  m.V << -1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, 0, 0, -1, t, 0, 1, t, 0, -1, -t, 0, 1, -t, t, 0, -1, t, 0, 1, -t, 0, -1, -t,
-      0, 1;
-  m.F.resize(20, 3);
-  m.F << 0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3, 9, 4, 3, 4, 2,
-      3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1;
-  m = subdivide_midpoint(m, levels);
-  for (Eigen::Index i = 0; i < m.V.rows(); ++i) m.V.row(i).normalize();
-  return m;
-}
 
 // The ball's hyperbolic translation phi_a on unit vectors (as in mobius_centre).
 MatrixXd mobius(const MatrixXd& S, const Eigen::Vector3d& a) {
