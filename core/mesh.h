@@ -62,6 +62,8 @@ VectorXi halfedge_twins(const MatrixXi& F, int num_vertices);
 // Boundary loops as ordered vertex lists, each oriented consistently with the faces (interior on the
 // left), longest first. Requires an edge-manifold mesh.
 std::vector<std::vector<int>> boundary_loops(const MatrixXi& F, int num_vertices);
+// One-ring of every vertex: its neighbours through an edge of F, sorted and unique.
+std::vector<std::vector<int>> vertex_neighbours(const MatrixXi& F, Eigen::Index num_vertices);
 
 // Connected components over faces (sharing an edge or a vertex counts as connected): per-face
 // component id, ids 0..n-1 in order of first face.

@@ -22,21 +22,6 @@ namespace {
 
 using Vec3 = Eigen::Vector3d;
 
-// Sorted, unique neighbours of every vertex.
-std::vector<std::vector<int>> vertex_neighbours(const MatrixXi& F, Eigen::Index nv) {
-  std::vector<std::vector<int>> adj(static_cast<std::size_t>(nv));
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      adj[F(f, c)].push_back(F(f, (c + 1) % 3));
-      adj[F(f, c)].push_back(F(f, (c + 2) % 3));
-    }
-  for (auto& a : adj) {
-    std::sort(a.begin(), a.end());
-    a.erase(std::unique(a.begin(), a.end()), a.end());
-  }
-  return adj;
-}
-
 // Distances to the medial plane and to the lowest point (see inferior_medial_landmarks).
 void inferior_medial_distances(const MatrixXd& V, const MatrixXi& F, VectorXd* d_med, VectorXd* d_inf) {
   const VectorXd w = barycentric_vertex_areas(V, F);

@@ -176,17 +176,7 @@ Eigen::Matrix3d sphere_orientation(const MatrixXd& V, const MatrixXi& F, const M
 
 int repair_sphere_flips(MatrixXd& S, const MatrixXi& F, int max_rounds) {
   const Eigen::Index nv = S.rows();
-  // vertex adjacency (sorted, unique) for the neighbour means
-  std::vector<std::vector<int>> adj(static_cast<std::size_t>(nv));
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      adj[F(f, c)].push_back(F(f, (c + 1) % 3));
-      adj[F(f, c)].push_back(F(f, (c + 2) % 3));
-    }
-  for (auto& a : adj) {
-    std::sort(a.begin(), a.end());
-    a.erase(std::unique(a.begin(), a.end()), a.end());
-  }
+  const std::vector<std::vector<int>> adj = vertex_neighbours(F, nv);  // for the neighbour means
   std::vector<char> moved(static_cast<std::size_t>(nv), 0);
   for (int round = 0; round < max_rounds; ++round) {
     std::vector<char> mark(static_cast<std::size_t>(nv), 0);

@@ -109,6 +109,20 @@ VectorXi halfedge_twins(const MatrixXi& F, int num_vertices) {
   return twin;
 }
 
+std::vector<std::vector<int>> vertex_neighbours(const MatrixXi& F, Eigen::Index num_vertices) {
+  std::vector<std::vector<int>> adj(static_cast<std::size_t>(num_vertices));
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      adj[F(f, c)].push_back(F(f, (c + 1) % 3));
+      adj[F(f, c)].push_back(F(f, (c + 2) % 3));
+    }
+  for (auto& a : adj) {
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+  }
+  return adj;
+}
+
 std::vector<std::vector<int>> boundary_loops(const MatrixXi& F, int num_vertices) {
   // A boundary half-edge a->b has no opposite b->a; its face lies on its left, so following the
   // half-edges themselves walks each loop with the interior on the left.
