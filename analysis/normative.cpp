@@ -364,6 +364,55 @@ std::vector<int> label_clusters(const ElementGrid& grid, const std::vector<int>&
   return label;
 }
 
+namespace {
+// The patient's scale factor to the reference over its normal elements (CompareOptions::rescale):
+// s minimises sum over normal elements of z^2 = ((s y - expected) / sd)^2, i.e.
+// s = sum(expected y / sd^2) / sum(y^2 / sd^2), where "normal" is |z| < threshold at the current s.
+// Starting from all elements, the set is refitted until it no longer changes (a few rounds). A
+// sequential sum in element order keeps the result independent of the thread count.
+template <class ValueOf>
+void rescale_to_reference(Comparison& out, const ValueOf& value_of, std::size_t size, double threshold) {
+  constexpr int kMaxRounds = 50;
+  std::vector<char> normal(size, 0);
+  for (std::size_t i = 0; i < size; ++i)
+    normal[i] = std::isfinite(value_of(i)) && std::isfinite(out.expected[i]) && out.sd[i] > 0 && value_of(i) > 0;
+  double scale = 1.0;
+  int used = 0, round = 0;
+  bool settled = false;
+  for (; round < kMaxRounds && !settled; ++round) {
+    double num = 0, den = 0;
+    used = 0;
+    for (std::size_t i = 0; i < size; ++i) {
+      if (!normal[i]) continue;
+      const double y = value_of(i), w = 1.0 / (out.sd[i] * out.sd[i]);
+      num += w * out.expected[i] * y;
+      den += w * y * y;
+      ++used;
+    }
+    if (!(den > 0) || used < 10) {
+      out.notes.push_back("rescaling to the reference skipped: fewer than 10 elements to fit it on");
+      return;
+    }
+    scale = num / den;
+    settled = true;
+    for (std::size_t i = 0; i < size; ++i) {
+      const double y = value_of(i);
+      if (!std::isfinite(y) || !std::isfinite(out.expected[i]) || !(out.sd[i] > 0) || !(y > 0)) continue;
+      const char now = std::abs((scale * y - out.expected[i]) / out.sd[i]) < threshold;
+      if (now != normal[i]) settled = false;
+      normal[i] = now;
+    }
+  }
+  if (!settled)
+    out.notes.push_back("rescaling to the reference did not settle in " + std::to_string(kMaxRounds) +
+                        " rounds: the last factor is used");
+  out.rescaled = true;
+  out.scale = scale;
+  out.scale_elements = used;
+  out.scale_rounds = round;
+}
+}  // namespace
+
 Comparison compare_to_reference(const NormativeReference& ref, const ElementTable& patient, const CompareOptions& options) {
   check_compatible(ref, patient, patient.subject_id.empty() ? std::string("patient table") : "patient " + patient.subject_id);
   if (!(options.threshold > 0)) throw InputError("--threshold: must be > 0 (|z| flagged as abnormal)");
@@ -386,7 +435,6 @@ Comparison compare_to_reference(const NormativeReference& ref, const ElementTabl
   out.cluster.assign(size, 0);
   const int min_n = std::max(options.min_subjects, out.age_adjusted ? 3 : 2);
   for (std::size_t i = 0; i < size; ++i) {
-    const double y = patient.blocks[i / static_cast<std::size_t>(ne)].elements[i % static_cast<std::size_t>(ne)].value;
     const double n = ref.n[i];
     if (n < min_n) continue;
     double expected = ref.mean[i], sd = ref.sd(static_cast<int>(i));
@@ -403,7 +451,14 @@ Comparison compare_to_reference(const NormativeReference& ref, const ElementTabl
     if (options.predictive) sd *= std::sqrt(inflation);
     out.expected[i] = expected;
     out.sd[i] = sd;
-    if (!std::isfinite(y) || !(sd > 0)) continue;
+  }
+  const auto value_of = [&](std::size_t i) {
+    return patient.blocks[i / static_cast<std::size_t>(ne)].elements[i % static_cast<std::size_t>(ne)].value;
+  };
+  if (options.rescale) rescale_to_reference(out, value_of, size, options.threshold);
+  for (std::size_t i = 0; i < size; ++i) {
+    const double y = out.scale * value_of(i), expected = out.expected[i], sd = out.sd[i];
+    if (!std::isfinite(y) || !std::isfinite(expected) || !(sd > 0)) continue;
     const double z = (y - expected) / sd;
     out.z[i] = z;
     ++out.num_compared;
@@ -477,12 +532,18 @@ std::string comparison_summary_json(const NormativeReference& ref, const std::st
   j["format"] = "authalic-comparison";
   j["version"] = 1;
   j["software"] = software_string();
-  j["z_definition"] = std::string("z = (patient - expected) / SD") +
+  j["z_definition"] = std::string(cmp.rescaled ? "z = (factor x patient - expected) / SD" : "z = (patient - expected) / SD") +
                       (cmp.predictive ? ", SD = predictive SD of a new control (reference SD x sqrt(1 + 1/n [+ (age - mean age)^2 / "
                                         "sum of squared age deviations]))"
                                       : ", SD = reference SD (residual SD with the age model)") +
                       "; hypometabolism is negative (NEUROSTAT/3D-SSP report the opposite sign)";
   j["predictive_sd"] = cmp.predictive;
+  j["rescale"] = {{"applied", cmp.rescaled},
+                  {"factor", cmp.scale},
+                  {"elements_used", cmp.scale_elements},
+                  {"rounds", cmp.scale_rounds},
+                  {"definition", "patient values x factor before z; the factor best fits the reference over the elements "
+                                 "found normal (|z| < threshold), refitted until that set settles"}};
   j["reference"] = {{"path", reference_path},
                     {"num_subjects", ref.subjects.size()},
                     {"domain", to_string(ref.grid.domain)},
@@ -581,7 +642,7 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
       const Element& el = patient.blocks[static_cast<std::size_t>(b)].elements[static_cast<std::size_t>(e)];
       csv += ref.hemispheres[static_cast<std::size_t>(b)] + "," + std::to_string(e) + "," + std::to_string(el.row) + "," +
              std::to_string(el.col);
-      for (double x : {el.value, cmp.expected[i], cmp.sd[i], cmp.z[i]}) {
+      for (double x : {cmp.scale * el.value, cmp.expected[i], cmp.sd[i], cmp.z[i]}) {  // so z = (value - expected) / sd
         csv += ',';
         append_number(csv, x);
       }

@@ -103,6 +103,14 @@ struct CompareOptions {
   // more: 6.4 % in the sample phantom's leave-one-out, 4.9 % with the predictive SD). false: the
   // plain reference SD (NEUROSTAT/3D-SSP), nearly the same for large references.
   bool predictive = true;
+  // Rescale the patient's values to the reference before z, by the one factor s that best fits
+  // the elements found normal (|z| < threshold), refitted until that set settles. The tables are
+  // normalised to the global cortical mean, which a focal hypometabolism lowers: every healthy
+  // element then looks relatively hypermetabolic (Borghammer et al., NeuroImage 2008; Yakushev et
+  // al.'s data-driven reference cluster, NeuroImage 2009, is the same idea). Fitting s on the
+  // normal elements only takes that bias out; for a healthy subject s stays within ~1 % of 1.
+  // false: the values as they are (the global normalisation alone).
+  bool rescale = true;
 };
 
 struct ElementCluster {
@@ -126,6 +134,11 @@ struct Comparison {
   std::vector<ElementCluster> clusters;  // by size (elements) descending, then |peak z|, then position
   bool age_adjusted = false;
   bool predictive = true;        // sd is the predictive SD (CompareOptions::predictive)
+  // CompareOptions::rescale: z = (scale * value - expected) / sd; scale = 1 when not rescaled.
+  bool rescaled = false;
+  double scale = 1.0;
+  int scale_elements = 0;        // elements the factor was fitted on (found normal)
+  int scale_rounds = 0;
   double patient_age = std::numeric_limits<double>::quiet_NaN();
   int num_compared = 0, num_hypo = 0, num_hyper = 0, num_without_z = 0;
   double threshold = 2.0;
@@ -151,6 +164,7 @@ struct ComparisonOutputPaths {
 //                          whose vertex_elements entry is non-empty; with several blocks
 //                          PREFIX_<hemisphere>_z.func.gii
 //   PREFIX_abnormal.csv    one row per abnormal element: hemisphere,id,row,col,value,expected,sd,z,
+//                          (value: the patient's value times the rescaling factor, so z = (value - expected) / sd)
 //                          direction,cluster,area_mm2,centroid_x_mm,centroid_y_mm,centroid_z_mm
 //   PREFIX.json            summary: reference, patient, threshold, counts, clusters, outputs
 // vertex_elements[b](v) = element id of vertex v in block b (-1 none), e.g. from the element label

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -337,6 +338,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     log.begin("normative comparison");
     CompareOptions co;
     co.threshold = options.z_threshold;
+    co.rescale = options.rescale;
     cmp = compare_to_reference(reference, table, co);
     summary.abnormal_elements = cmp.num_hypo + cmp.num_hyper;
     summary.clusters = static_cast<int>(cmp.clusters.size());
@@ -353,7 +355,8 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
                  {"depth_mm", options.depth_mm},
                  {"sampling", hemis[0].sampling.method},
                  {"normalisation", norm.description.empty() ? "none" : norm.description},
-                 {"z_threshold", options.z_threshold}};
+                 {"z_threshold", options.z_threshold},
+                 {"rescale_to_reference", options.rescale}};
   // One JSON sidecar per BIDS base name (x.nii.gz and x.png share x.json, which lists both).
   std::map<std::string, json> sidecars;
   auto sidecar = [&](const std::string& file, const json& extra) {
@@ -478,6 +481,14 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       rd.normative.domain = "square, K = " + std::to_string(reference.grid.k);
       rd.normative.description = fs::path(in.normative).filename().string() + " (" + reference.software + ")";
       rd.normative.threshold = options.z_threshold;
+      if (cmp.rescaled) {
+        char buf[160];
+        std::snprintf(buf, sizeof(buf), "x %.4f, fitted on the %d elements with |z| < %.1f", cmp.scale,
+                      cmp.scale_elements, options.z_threshold);
+        rd.normative.rescale = buf;
+      } else {
+        rd.normative.rescale = "none";
+      }
       for (const ElementCluster& c : cmp.clusters) {
         ReportCluster r;
         r.id = c.id;

@@ -37,6 +37,7 @@ struct RunOptions {
   double depth_mm = 10.0;       // normal projection depth (Zou et al. 2011, section 5.2)
   std::string normalize = "global";  // "none", "global", or a NIfTI mask path (reference region)
   double z_threshold = 2.0;     // |z| flagged as abnormal
+  bool rescale = true;          // CompareOptions::rescale
   bool report = true;           // write report.html
   bool rectangle = true;        // also the 1:2 whole-brain rectangle map
 };

@@ -358,9 +358,13 @@ std::string report_html(const ReportData& d) {
                       {"elements", d.normative.domain},
                       {"abnormal when", "z <= -" + fixed(d.normative.threshold, 1) + " (hypometabolism) or z >= +" +
                                             fixed(d.normative.threshold, 1)}};
+    if (!d.normative.rescale.empty()) rows.push_back({"patient rescaled to the reference", d.normative.rescale});
     key_value_table(out, rows);
-    out << "<p>z = (patient - mean of the controls) / SD of the controls, element by element (as NEUROSTAT / 3D-SSP "
-           "compare a patient with a normal database). It assumes the controls are representative of the patient's "
+    out << "<p>z = (patient - mean of the controls) / SD, element by element (as NEUROSTAT / 3D-SSP "
+           "compare a patient with a normal database); the SD is the controls' SD widened by sqrt(1 + 1/n) for the "
+           "uncertainty of a mean of n controls. Before that, the patient's values are multiplied by the one factor that "
+           "best fits the reference over the elements found normal, so a focal loss, which lowers the global mean, does "
+           "not make healthy cortex look hypermetabolic. It assumes the controls are representative of the patient's "
            "population, were processed the same way (same map, same K, same normalisation), and that element values "
            "are roughly normally distributed among them; with n controls a healthy element still exceeds |z| = 2 in "
            "about 5-7% of cases.</p>\n";

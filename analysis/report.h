@@ -53,6 +53,7 @@ struct ReportNormative {
   std::string domain;            // e.g. "square, K = 32"
   std::string description;       // free text: what the reference is, its file, its software version
   double threshold = 2.0;        // |z| flagged
+  std::string rescale;           // the patient's rescaling to the reference (CompareOptions::rescale), "" = not shown
 };
 
 struct ReportData {

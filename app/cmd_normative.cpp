@@ -35,6 +35,7 @@ struct CompareArgs {
   double age = std::nan("");
   bool no_age = false;
   bool plain_sd = false;
+  bool no_rescale = false;
   int min_subjects = 3;
 };
 
@@ -106,6 +107,7 @@ int run_compare(const CompareArgs& a) {
   o.age = a.age;
   o.use_age = !a.no_age;
   o.predictive = !a.plain_sd;
+  o.rescale = !a.no_rescale;
   o.min_subjects = a.min_subjects;
   const analysis::Comparison cmp = analysis::compare_to_reference(ref, patient, o);
   if (!a.labels.empty() && a.labels.size() != ref.hemispheres.size())
@@ -184,6 +186,10 @@ const bool registered = register_command({50, [](CLI::App& parent) {
   compare->add_flag("--plain-sd", c->plain_sd,
                     "z in units of the reference SD itself (NEUROSTAT/3D-SSP) instead of the predictive SD of a new control "
                     "(SD x sqrt(1 + 1/n [+ age term]); default, calibrated for small references)");
+  compare->add_flag("--no-rescale", c->no_rescale,
+                    "Compare the table's values as they are. Default: first rescale them by the one factor that best fits "
+                    "the reference over the elements found normal (|z| < threshold), so a focal hypometabolism, which "
+                    "lowers the global mean, does not make healthy cortex look hypermetabolic");
   compare->add_option("--min-subjects", c->min_subjects, "Elements with fewer controls get no z")
       ->check(CLI::Range(2, 1000000))
       ->capture_default_str();

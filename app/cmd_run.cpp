@@ -103,6 +103,9 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_option("--normalize", a->options.normalize,
                   "Intensity normalisation: none, global (cortical mean), or a reference-region mask NIfTI (SUVR)");
   sub->add_option("--threshold", a->options.z_threshold, "|z| at or beyond which an element is abnormal (default 2)");
+  sub->add_flag("--no-rescale", [a](std::int64_t) { a->options.rescale = false; },
+                "Compare the globally normalised values as they are, without rescaling the subject to the reference "
+                "over its normal elements (see `authalic normative compare --help`)");
   sub->add_flag("--no-report", [a](std::int64_t) { a->options.report = false; }, "Skip report.html");
   sub->add_flag("--no-rectangle", [a](std::int64_t) { a->options.rectangle = false; },
                 "Skip the whole-brain 1:2 rectangle map (sub-<id>_hemi-?_space-authalicrect_flat.surf.gii)");

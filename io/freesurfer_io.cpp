@@ -282,7 +282,12 @@ Label parse_freesurfer_label(const std::string& text, const std::string& path) {
     if (got < 5) fail(path, "line " + std::to_string(i + 3) + " is not 'vertex x y z value': '" + line.substr(0, 60) + "'", hint);
     if (!std::isfinite(f[0]) || f[0] != std::floor(f[0]) || f[0] > std::numeric_limits<int>::max())
       fail(path, "line " + std::to_string(i + 3) + " has an invalid vertex index", hint);
-    if (f[0] < 0) fail(path, "line " + std::to_string(i + 3) + " has a negative vertex index " + std::to_string(static_cast<long long>(f[0])), hint);
+    // Print the index as a double: a huge negative one does not fit a long long (fuzzing found it).
+    if (f[0] < 0) {
+      char idx[64];
+      std::snprintf(idx, sizeof(idx), "%.0f", f[0] < -1e15 ? -1e15 : f[0]);
+      fail(path, "line " + std::to_string(i + 3) + " has a negative vertex index " + (f[0] < -1e15 ? "below " : "") + idx, hint);
+    }
     if (!std::isfinite(f[1]) || !std::isfinite(f[2]) || !std::isfinite(f[3]))
       fail(path, "line " + std::to_string(i + 3) + " has a non-finite coordinate", "fix the label file");
     label.vertices[i] = static_cast<int>(f[0]);

@@ -114,6 +114,54 @@ std::vector<ElementTable> cohort(int subjects, bool with_ages) {
   return tables;
 }
 
+// A focal loss lowers the patient's global mean, so after global normalisation every healthy
+// element reads ~5 % high. The rescaling fits the one factor on the elements found normal: here the
+// healthy ones are exactly 1.05 x the reference mean, so the factor is exactly 1 / 1.05, the lesion
+// stays flagged and nothing healthy is flagged; without it, every healthy element is "hyper".
+TEST(Normative, RescalingToTheReferenceRemovesTheGlobalNormalisationShift) {
+  constexpr int kK = 8, kN = kK * kK;
+  NormativeReference ref;
+  for (int s = 0; s < 12; ++s) {
+    std::vector<double> v(kN);
+    for (int i = 0; i < kN; ++i) v[static_cast<std::size_t>(i)] = 1.0 + 0.01 * (i % 7) + 0.04 * noise(s, i);
+    const ElementTable t = make_table(ElementDomain::Square, kK, {"left"}, "c" + std::to_string(s), v);
+    if (s == 0) ref = empty_reference_like(t);
+    add_subject(ref, t, t.subject_id + ".csv");
+  }
+  std::vector<double> p(kN);
+  std::vector<int> lesion;
+  for (int i = 0; i < kN; ++i) {
+    const int r = i / kK, c = i % kK;
+    const bool in = r >= 2 && r < 5 && c >= 3 && c < 6;  // 3 x 3 elements
+    if (in) lesion.push_back(i);
+    p[static_cast<std::size_t>(i)] = 1.05 * ref.mean[static_cast<std::size_t>(i)] * (in ? 0.7 : 1.0);
+  }
+  const ElementTable patient = make_table(ElementDomain::Square, kK, {"left"}, "p", p);
+  const Comparison r = compare_to_reference(ref, patient);
+  ASSERT_TRUE(r.rescaled);
+  EXPECT_NEAR(r.scale, 1 / 1.05, 1e-12);
+  EXPECT_EQ(r.scale_elements, kN - 9);
+  EXPECT_EQ(r.num_hyper, 0);
+  EXPECT_EQ(r.num_hypo, 9);
+  for (int i : lesion) EXPECT_EQ(r.flag[static_cast<std::size_t>(i)], -1) << i;
+  ASSERT_EQ(r.clusters.size(), 1u);
+  EXPECT_EQ(r.clusters[0].elements, lesion);
+  // z is measured on the rescaled value.
+  EXPECT_NEAR(r.z[0], (r.scale * p[0] - r.expected[0]) / r.sd[0], 1e-12);
+  EXPECT_NEAR(r.z[0], 0.0, 1e-9);
+  CompareOptions off;
+  off.rescale = false;
+  const Comparison g = compare_to_reference(ref, patient, off);
+  EXPECT_FALSE(g.rescaled);
+  EXPECT_EQ(g.scale, 1.0);
+  EXPECT_GT(g.num_hyper, kN / 2) << "the global-normalisation shift alone should flag most healthy elements";
+  // A healthy control (exactly the reference mean) keeps factor 1 and no flags.
+  std::vector<double> h(ref.mean.begin(), ref.mean.end());
+  const Comparison c = compare_to_reference(ref, make_table(ElementDomain::Square, kK, {"left"}, "h", h));
+  EXPECT_NEAR(c.scale, 1.0, 1e-12);
+  EXPECT_EQ(c.num_hypo + c.num_hyper, 0);
+}
+
 TEST(Normative, MergingTwoHalvesEqualsTheWhole) {
   const auto tables = cohort(21, true);
   const NormativeReference whole = build_from(tables, 0, 21);
@@ -169,8 +217,10 @@ TEST(Normative, AgeModelEqualsDirectLeastSquaresFit) {
   patient.subject_id = "patient";
   patient.age = 71.0;
   patient.blocks[0].elements[e].value = 0.8;
+  // Hand computations of z: without the rescaling to the reference (tested on its own below).
   CompareOptions plain_sd;
   plain_sd.predictive = false;
+  plain_sd.rescale = false;
   const Comparison c = compare_to_reference(ref, patient, plain_sd);
   ASSERT_TRUE(c.age_adjusted);
   const double expected = my + beta * (71.0 - ma);
@@ -178,7 +228,9 @@ TEST(Normative, AgeModelEqualsDirectLeastSquaresFit) {
   EXPECT_NEAR(c.sd[e], sd_res, 1e-12);
   EXPECT_NEAR(c.z[e], (0.8 - expected) / sd_res, 1e-9);
   // Predictive SD of the regression (default): sd_res sqrt(1 + 1/n + (age - mean age)^2 / Saa).
-  const Comparison pred = compare_to_reference(ref, patient);
+  CompareOptions predictive;
+  predictive.rescale = false;
+  const Comparison pred = compare_to_reference(ref, patient, predictive);
   const double sd_pred = sd_res * std::sqrt(1 + 1.0 / 15 + (71.0 - ma) * (71.0 - ma) / saa);
   EXPECT_NEAR(pred.sd[e], sd_pred, 1e-12);
   EXPECT_NEAR(pred.z[e], (0.8 - expected) / sd_pred, 1e-9);

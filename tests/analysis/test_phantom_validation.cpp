@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -31,7 +32,12 @@
 namespace authalic::analysis {
 namespace {
 
-const std::string kSample = std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/";
+// AUTHALIC_PHANTOM_DIR=DIR runs the same validation on another synthetic cohort from
+// `authalic phantom DIR --synthetic` (e.g. to try a recalibration before regenerating sample_data).
+const std::string kSample = [] {
+  const char* dir = std::getenv("AUTHALIC_PHANTOM_DIR");
+  return dir && *dir ? std::string(dir) + "/" : std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/";
+}();
 constexpr int kK = 32;
 
 struct Hemisphere {
@@ -155,9 +161,13 @@ TEST(PhantomValidation, LeaveOneOutAndPlantedRegionOnTheSampleCohort) {
   const double mean = sum / controls.size();
   std::cout << "[ leave-one-out, 20 controls, K=32 x 2 hemispheres, |z| >= 2: mean " << 100 * mean << "%, largest "
             << 100 * worst << "% ]\n[" << per.str() << " ]\n";
-  // Issue 6: <= 5 %. Met on average (4.9 %); single controls range from 2.2 % to 7.6 % (measured), as the
-  // phantom's regional variability comes in 25 mm cubes (each a block of correlated elements), so a
-  // subject's share moves in steps of whole cubes. The bound on the largest keeps that spread honest.
+  // Issue 6: <= 5 %. Met on average (5.0 %); single controls range from 2.2 % to 7.5 % (measured).
+  // Why single controls cannot all stay under 5 %: for Gaussian element values a control compared
+  // with 19 others exceeds |z| = 2 in 6.1 % of elements on average (t with 18 df), and neighbouring
+  // elements are not independent (7 mm PET resolution, 5 mm elements, 25 mm regional effects), so
+  // one subject's share scatters by ~1.5 % around the mean (a noise-only phantom measured mean 6.3 %,
+  // largest 10 %). The phantom's bounded regional effects bring the mean to 5 %; the bound on the
+  // largest keeps the spread honest.
   EXPECT_LE(mean, 0.05);
   EXPECT_LE(worst, 0.09);
 
@@ -185,10 +195,12 @@ TEST(PhantomValidation, LeaveOneOutAndPlantedRegionOnTheSampleCohort) {
               << 100 * recovered << "%); " << false_flags << " of " << outside << " elements outside flagged ("
               << 100 * flagged_outside << "%) ]\n";
     EXPECT_GE(recovered, 0.90) << p.subject_id;
-    // Issue 6: <= 5 % outside. Measured 7.5 % and 8.5 % (most of them hyper: the region lowers the
-    // global cortical mean by ~1 %, and each patient has its own regional variability, like the
-    // controls above); the bound documents the measured level until the phantom is recalibrated.
-    EXPECT_LE(flagged_outside, 0.10) << p.subject_id;
+    // Issue 6: <= 5 % outside. Measured 5.2 % and 7.8 % with the rescaling to the reference (7.5 %
+    // and 8.5 % without: the region lowers the global cortical mean, so healthy cortex read high);
+    // what remains is each patient's own regional variability, the same spread as the controls'.
+    EXPECT_LE(flagged_outside, 0.085) << p.subject_id;
+    EXPECT_TRUE(c.rescaled);
+    EXPECT_LT(c.scale, 1.0) << "the lesion lowers the global mean, so the healthy elements read high and scale down";
   }
 }
 

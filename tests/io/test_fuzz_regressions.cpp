@@ -55,3 +55,12 @@ TEST(FuzzRegression, GiftiValueOutsideMdCrashedGifticlib) {
   const std::string path = write_case(dir, "crash1.label.gii", bytes);
   expect_input_error([&] { read_region_vertices(path); }, path, "<Value> is not allowed inside <MetaData>");
 }
+
+// A vertex index of -3e47 reached a double -> long long cast in the error message (undefined
+// behaviour, UBSan); the message now prints the index without converting it to an integer.
+TEST(FuzzRegression, LabelWithHugeNegativeIndexIsRefusedCleanly) {
+  const std::string dir = temp_dir("fuzz_label_index");
+  const std::string bytes = "#!ascii label\n1\n-" + std::string(48, '1') + "  0.0  0.0  0.0 0.0\n";
+  const std::string path = write_case(dir, "crash2.label", bytes);
+  expect_input_error([&] { read_region_vertices(path); }, path, "negative vertex index below -1000000000000000");
+}
