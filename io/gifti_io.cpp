@@ -168,7 +168,9 @@ struct StructureCheck {
   struct Frame {
     std::string name;
     std::vector<std::string> children;
+    bool cdata_ended = false;  // a CDATA section of this element has closed
   };
+  bool in_cdata = false;
   std::vector<Frame> stack;
   std::string error;
   bool seen_root = false;
@@ -221,6 +223,19 @@ struct StructureCheck {
     self->stack.push_back({name, {}});
     self->seen_root = true;
   }
+  // gifticlib calls exit() (the whole process ends, found by fuzzing) when any character data,
+  // even whitespace, follows a CDATA section inside one element: "<Name><![CDATA[a]]> </Name>".
+  static void XMLCALL cdata_start(void* user) { static_cast<StructureCheck*>(user)->in_cdata = true; }
+  static void XMLCALL cdata_end(void* user) {
+    auto* self = static_cast<StructureCheck*>(user);
+    self->in_cdata = false;
+    if (!self->stack.empty()) self->stack.back().cdata_ended = true;
+  }
+  static void XMLCALL text(void* user, const XML_Char*, int) {
+    auto* self = static_cast<StructureCheck*>(user);
+    if (!self->error.empty() || self->in_cdata || self->stack.empty() || !self->stack.back().cdata_ended) return;
+    self->error = "text after a CDATA section inside <" + self->stack.back().name + "> (gifticlib cannot read it)";
+  }
   static void XMLCALL end(void* user, const XML_Char*) {
     auto* self = static_cast<StructureCheck*>(user);
     if (!self->error.empty() || self->stack.empty()) return;
@@ -236,6 +251,8 @@ void check_gifti_structure(const std::string& xml, const std::string& path) {
   if (!parser) throw std::runtime_error(path + ": cannot create an XML parser");
   XML_SetUserData(parser, &check);
   XML_SetElementHandler(parser, StructureCheck::start, StructureCheck::end);
+  XML_SetCdataSectionHandler(parser, StructureCheck::cdata_start, StructureCheck::cdata_end);
+  XML_SetCharacterDataHandler(parser, StructureCheck::text);
   const int ok = XML_Parse(parser, xml.data(), static_cast<int>(std::min<std::size_t>(xml.size(), INT32_MAX)), 1);
   std::string xml_error;
   if (ok != XML_STATUS_OK)

@@ -64,3 +64,26 @@ TEST(FuzzRegression, LabelWithHugeNegativeIndexIsRefusedCleanly) {
   const std::string path = write_case(dir, "crash2.label", bytes);
   expect_input_error([&] { read_region_vertices(path); }, path, "negative vertex index below -1000000000000000");
 }
+
+// gifticlib ended the whole process with exit() when text followed a CDATA section inside one
+// element (here "<Name><![CDATA[a]]>zz</Name>"); the structure check now refuses it first.
+TEST(FuzzRegression, GiftiTextAfterCdataEndedTheProcess) {
+  const std::string dir = temp_dir("fuzz_gifti_cdata");
+  const std::string bytes =
+    "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    "<GIFTI Version=\"1.0\" NumberOfDataArrays=\"1\">\n"
+    "   <MetaData>\n"
+    "      <MD>\n"
+    "         <Name><![CDATA[generator]]>zz</Name>\n"
+    "         <Value><![CDATA[authalic]]></Value>\n"
+    "      </MD>\n"
+    "   </MetaData>\n"
+    "   <DataArray Intent=\"NIFTI_INTENT_SHAPE\" DataType=\"NIFTI_TYPE_FLOAT32\" ArrayIndexingOrder=\"RowMajorOrder\"\n"
+    "              Dimensionality=\"1\" Dim0=\"1\" Encoding=\"ASCII\" Endian=\"LittleEndian\" ExternalFileName=\"\"\n"
+    "              ExternalFileOffset=\"\">\n"
+    "      <Data>1.5</Data>\n"
+    "   </DataArray>\n"
+    "</GIFTI>\n";
+  const std::string path = write_case(dir, "crash3.func.gii", bytes);
+  expect_input_error([&] { read_per_vertex(path, 1); }, path, "text after a CDATA section inside <Name>");
+}
