@@ -434,7 +434,10 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       for (std::size_t i = 0; i < zb.elements.size(); ++i) zb.elements[i].value = z[i];
       const std::string zimg = hp + "_desc-z_elements.nii.gz";
       io::write_nifti((stage / zimg).string(), element_volume(zb, table.grid, false, in.normative), "authalic z " + hemis[b].name);
-      sidecar(zimg, {{"description", "element z-scores, z = (patient - reference mean) / reference SD"}});
+      sidecar(zimg, {{"description", "element z-scores, z = (factor x patient - reference mean) / (reference SD x sqrt(1 + 1/n)); "
+                                     "factor: the patient's rescaling to the reference over its normal elements (1 = none)"},
+                     {"rescale_factor", cmp.scale},
+                     {"rescale_elements", cmp.scale_elements}});
       ScalarColouring zc;
       zc.colormap = "coolwarm";
       zc.vmin = -4;
