@@ -373,9 +373,12 @@ namespace {
 template <class ValueOf>
 void rescale_to_reference(Comparison& out, const ValueOf& value_of, std::size_t size, double threshold) {
   constexpr int kMaxRounds = 50;
+  const auto usable = [&](std::size_t i) {
+    const double y = value_of(i);
+    return std::isfinite(y) && y > 0 && std::isfinite(out.expected[i]) && out.sd[i] > 0;
+  };
   std::vector<char> normal(size, 0);
-  for (std::size_t i = 0; i < size; ++i)
-    normal[i] = std::isfinite(value_of(i)) && std::isfinite(out.expected[i]) && out.sd[i] > 0 && value_of(i) > 0;
+  for (std::size_t i = 0; i < size; ++i) normal[i] = usable(i);
   double scale = 1.0;
   int used = 0, round = 0;
   bool settled = false;
@@ -396,9 +399,8 @@ void rescale_to_reference(Comparison& out, const ValueOf& value_of, std::size_t 
     scale = num / den;
     settled = true;
     for (std::size_t i = 0; i < size; ++i) {
-      const double y = value_of(i);
-      if (!std::isfinite(y) || !std::isfinite(out.expected[i]) || !(out.sd[i] > 0) || !(y > 0)) continue;
-      const char now = std::abs((scale * y - out.expected[i]) / out.sd[i]) < threshold;
+      if (!usable(i)) continue;
+      const char now = std::abs((scale * value_of(i) - out.expected[i]) / out.sd[i]) < threshold;
       if (now != normal[i]) settled = false;
       normal[i] = now;
     }
