@@ -370,11 +370,11 @@ namespace {
 // s = sum(expected y / sd^2) / sum(y^2 / sd^2), where "normal" is |z| < threshold at the current s.
 // Starting from all elements, the set is refitted until it no longer changes (a few rounds). A
 // sequential sum in element order keeps the result independent of the thread count.
-template <class ValueOf>
-void rescale_to_reference(Comparison& out, const ValueOf& value_of, std::size_t size, double threshold) {
+void rescale_to_reference(Comparison& out, const std::vector<double>& value, double threshold) {
+  const std::size_t size = value.size();
   constexpr int kMaxRounds = 50;
   const auto usable = [&](std::size_t i) {
-    const double y = value_of(i);
+    const double y = value[i];
     return std::isfinite(y) && y > 0 && std::isfinite(out.expected[i]) && out.sd[i] > 0;
   };
   std::vector<char> normal(size, 0);
@@ -387,7 +387,7 @@ void rescale_to_reference(Comparison& out, const ValueOf& value_of, std::size_t 
     used = 0;
     for (std::size_t i = 0; i < size; ++i) {
       if (!normal[i]) continue;
-      const double y = value_of(i), w = 1.0 / (out.sd[i] * out.sd[i]);
+      const double y = value[i], w = 1.0 / (out.sd[i] * out.sd[i]);
       num += w * out.expected[i] * y;
       den += w * y * y;
       ++used;
@@ -400,7 +400,7 @@ void rescale_to_reference(Comparison& out, const ValueOf& value_of, std::size_t 
     settled = true;
     for (std::size_t i = 0; i < size; ++i) {
       if (!usable(i)) continue;
-      const char now = std::abs((scale * value_of(i) - out.expected[i]) / out.sd[i]) < threshold;
+      const char now = std::abs((scale * value[i] - out.expected[i]) / out.sd[i]) < threshold;
       if (now != normal[i]) settled = false;
       normal[i] = now;
     }
@@ -454,12 +454,12 @@ Comparison compare_to_reference(const NormativeReference& ref, const ElementTabl
     out.expected[i] = expected;
     out.sd[i] = sd;
   }
-  const auto value_of = [&](std::size_t i) {
-    return patient.blocks[i / static_cast<std::size_t>(ne)].elements[i % static_cast<std::size_t>(ne)].value;
-  };
-  if (options.rescale) rescale_to_reference(out, value_of, size, options.threshold);
+  std::vector<double> value(size);  // the patient's, in the reference's order (blocks x elements)
+  for (std::size_t i = 0; i < size; ++i)
+    value[i] = patient.blocks[i / static_cast<std::size_t>(ne)].elements[i % static_cast<std::size_t>(ne)].value;
+  if (options.rescale) rescale_to_reference(out, value, options.threshold);
   for (std::size_t i = 0; i < size; ++i) {
-    const double y = out.scale * value_of(i), expected = out.expected[i], sd = out.sd[i];
+    const double y = out.scale * value[i], expected = out.expected[i], sd = out.sd[i];
     if (!std::isfinite(y) || !std::isfinite(expected) || !(sd > 0)) continue;
     const double z = (y - expected) / sd;
     out.z[i] = z;

@@ -4,25 +4,6 @@
 // uses RAS, so x and y flip sign: RAS = diag(-1, -1, 1) * LPS.
 #include "io/itk_dicom.h"
 
-#if defined(__clang__)
-// Debian's ITK 5.2 headers were configured for GCC only (itk_compiler_detection.h stops with
-// "Unsupported compiler" under clang, measured). The clang builds (libFuzzer, ThreadSanitizer
-// with libomp) therefore get a DICOM-less io library; every GCC build has the real one below.
-#include "core/error.h"
-
-namespace authalic::io::detail {
-bool itk_is_dicom_directory(const std::string&) { return false; }
-DicomSeries itk_read_dicom_series(const std::string& directory) {
-  throw InputError(directory + ": DICOM series need the GCC build (this binary was built with clang, where Debian's ITK "
-                   "headers do not compile); use build/authalic or convert the series to NIfTI (dcm2niix)");
-}
-void itk_write_dicom_series(const std::string& directory, const std::array<int, 3>&, const std::vector<float>&,
-                            const std::array<double, 16>&) {
-  throw std::runtime_error(directory + ": DICOM writing needs the GCC build (Debian's ITK headers reject clang)");
-}
-}  // namespace authalic::io::detail
-#else
-
 #include <gdcmUIDGenerator.h>
 #include <itkGDCMImageIO.h>
 #include <itkGDCMSeriesFileNames.h>
@@ -251,4 +232,3 @@ void itk_write_dicom_series(const std::string& directory, const std::array<int, 
 
 }  // namespace authalic::io::detail
 
-#endif  // !__clang__

@@ -3,20 +3,6 @@
 // is not linked (symbol clash with nifti-clib). ITK works in LPS; our affines are RAS.
 #include "io/itk_register.h"
 
-#if defined(__clang__)
-// Debian's ITK 5.2 headers were configured for GCC only ("Unsupported compiler" under clang, as
-// in io/itk_dicom.cpp). The clang builds (libFuzzer, ThreadSanitizer) get a registration-less io
-// library; every GCC build has the real one below.
-#include <stdexcept>
-
-namespace authalic::io::detail {
-PlainRigidResult itk_register_rigid(const PlainVolume&, const PlainVolume&) {
-  throw std::runtime_error("registration needs the GCC build (this binary was built with clang, where Debian's ITK "
-                           "headers do not compile); use build/authalic");
-}
-}  // namespace authalic::io::detail
-#else
-
 #include <itkCenteredTransformInitializer.h>
 #include <itkEuler3DTransform.h>
 #include <itkImage.h>
@@ -139,4 +125,3 @@ PlainRigidResult itk_register_rigid(const PlainVolume& fixed_in, const PlainVolu
 }
 
 }  // namespace authalic::io::detail
-#endif  // !__clang__
