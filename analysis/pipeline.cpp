@@ -23,6 +23,7 @@
 #include "core/error.h"
 #include "core/metrics.h"
 #include "core/rectangle_map.h"
+#include "core/region.h"
 #include "core/square_map.h"
 #include "core/version.h"
 #include "io/atomic_file.h"
@@ -107,13 +108,16 @@ bool is_surface_file(const std::string& path) {
   return false;
 }
 
-void load_hemisphere(Hemisphere& h, const std::string& white, const std::string& pial, const std::string& cortex) {
+// Reads one hemisphere; returns a line for the log saying how a vertex label was cleaned up
+// into one disk (core/region.h), empty for a face set.
+std::string load_hemisphere(Hemisphere& h, const std::string& white, const std::string& pial, const std::string& cortex) {
   h.white = io::read_surface(white);
   h.pial = io::read_surface(pial);
   const int n = h.white.mesh.num_vertices();
   if (h.pial.mesh.num_vertices() != n)
     throw InputError(pial + ": has " + std::to_string(h.pial.mesh.num_vertices()) + " vertices but " + white + " has " +
                      std::to_string(n) + "; white and pial must come from the same subject and hemisphere");
+  std::string note;
   if (is_surface_file(cortex)) {
     // A surface on the same vertices whose triangles are the cortex (e.g. FreeSurfer's flat
     // patch as GIFTI): its face set is the region, as `authalic flatten --faces-from`.
@@ -122,27 +126,36 @@ void load_hemisphere(Hemisphere& h, const std::string& white, const std::string&
       throw InputError(cortex + ": has " + std::to_string(region.mesh.num_vertices()) + " vertices but " + white + " has " +
                        std::to_string(n) + "; a cortex face set must be on the white surface's vertices");
     h.cortex_faces = region.mesh.F;
-    std::vector<char> used(n, 0);
-    for (Eigen::Index f = 0; f < h.cortex_faces.rows(); ++f)
-      for (int c = 0; c < 3; ++c) used[h.cortex_faces(f, c)] = 1;
-    h.cortex.clear();
-    for (int v = 0; v < n; ++v)
-      if (used[v]) h.cortex.push_back(v);
   } else {
-    h.cortex = io::read_region_vertices(cortex, n);
+    // A label or mask (vertices): its whole triangles, cleaned up into one disk (islands dropped,
+    // small holes filled, pinch vertices resolved), as `authalic flatten --label`.
+    const std::vector<int> label = io::read_region_vertices(cortex, n);
     std::vector<bool> in(n, false);
-    for (int v : h.cortex) in[v] = true;
-    std::vector<Eigen::Vector3i> faces;
-    const MatrixXi& F = h.white.mesh.F;
-    for (int f = 0; f < F.rows(); ++f)
-      if (in[F(f, 0)] && in[F(f, 1)] && in[F(f, 2)]) faces.emplace_back(F(f, 0), F(f, 1), F(f, 2));
-    h.cortex_faces.resize(static_cast<Eigen::Index>(faces.size()), 3);
-    for (std::size_t f = 0; f < faces.size(); ++f) h.cortex_faces.row(static_cast<Eigen::Index>(f)) = faces[f].transpose();
+    for (int v : label) in[v] = true;
+    const RegionCleanup c = region_faces_from_vertices(h.white.mesh.V, h.white.mesh.F, in);
+    if (c.F.rows() == 0)
+      throw InputError(cortex + ": the label's " + std::to_string(label.size()) + " vertices contain no whole triangle of " +
+                       white + "; check that the label belongs to this surface");
+    if (!c.is_disk())
+      throw InputError(cortex + " on " + white + ": " + c.problem() +
+                       "; the map needs a region with one boundary loop, e.g. FreeSurfer's ?h.cortex.label");
+    h.cortex_faces = c.F;
+    std::ostringstream line;
+    line << h.name << " cortex " << fs::path(cortex).filename().string() << ": " << label.size() << " label vertices, "
+         << c.F.rows() << " faces, " << std::fixed << std::setprecision(1) << c.area_mm2 << " mm^2; " << c.summary();
+    note = line.str();
   }
+  std::vector<char> used(n, 0);
+  for (Eigen::Index f = 0; f < h.cortex_faces.rows(); ++f)
+    for (int c = 0; c < 3; ++c) used[h.cortex_faces(f, c)] = 1;
+  h.cortex.clear();
+  for (int v = 0; v < n; ++v)
+    if (used[v]) h.cortex.push_back(v);
   const TopologyReport t = analyze_topology(h.white.mesh.V, h.cortex_faces);
   if (!t.is_disk())
     throw InputError(cortex + ": the cortex region on " + white + " is not one disk (" + t.summary() +
                      "); the map needs a region with one boundary loop, e.g. FreeSurfer's ?h.cortex.label");
+  return note;
 }
 
 }  // namespace
@@ -233,8 +246,10 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   hemis[1].name = "right";
   hemis[1].tag = "R";
   hemis[1].left = false;
-  load_hemisphere(hemis[0], in.lh_white, in.lh_pial, in.lh_cortex);
-  load_hemisphere(hemis[1], in.rh_white, in.rh_pial, in.rh_cortex);
+  const std::string left_note = load_hemisphere(hemis[0], in.lh_white, in.lh_pial, in.lh_cortex);
+  const std::string right_note = load_hemisphere(hemis[1], in.rh_white, in.rh_pial, in.rh_cortex);
+  for (const std::string& note : {left_note, right_note})
+    if (!note.empty()) log.note(note);
   const io::Volume pet = io::read_volume(in.pet);
   NormativeReference reference;
   const bool compare = !in.normative.empty();

@@ -15,6 +15,7 @@
 #include "app/memory_guard.h"
 #include "core/error.h"
 #include "core/metrics.h"
+#include "core/region.h"
 #include "core/square_map.h"
 #include "core/sulcal_depth.h"
 #include "io/image_io.h"
@@ -35,6 +36,8 @@ struct FlattenArgs {
   int fixed_steps = 0;
   int iterations = 200;
   bool no_polish = false;
+  bool keep_failed = false;
+  std::string start = "stretch";
   double max_memory = -1;  // GB; < 0: 75% of the physical RAM
   long long max_vertices = 300000;
 };
@@ -44,8 +47,10 @@ const char* kOrientationRule =
     "point nearest the most anterior (largest RAS y) region vertex is at the middle of the top side (x = 0.5, y = 1); "
     "the boundary follows counter-clockwise by arc length; a right hemisphere is the mirror image of a left one";
 
-// The cortex region's faces on SURFACE's vertices, from whichever option was given.
-MatrixXi region_faces(const FlattenArgs& a, const io::Surface& surface, std::string* source) {
+// The cortex region's faces on SURFACE's vertices, from whichever option was given. A label
+// (vertices) is cleaned up into one disk (core/region.h); *cleanup says what was changed.
+MatrixXi region_faces(const FlattenArgs& a, const io::Surface& surface, std::string* source,
+                      std::unique_ptr<RegionCleanup>* cleanup) {
   const TriMesh& mesh = surface.mesh;
   const int nv = mesh.num_vertices();
   if (!a.faces_from.empty()) {
@@ -60,14 +65,18 @@ MatrixXi region_faces(const FlattenArgs& a, const io::Surface& surface, std::str
     const std::vector<int> verts = io::read_region_vertices(a.label, nv);
     std::vector<bool> mask(nv, false);
     for (int v : verts) mask[v] = true;
-    const Submesh sub = submesh_from_vertices(mesh, mask);
-    MatrixXi F(sub.mesh.F.rows(), 3);
-    for (Eigen::Index f = 0; f < F.rows(); ++f)
-      for (int c = 0; c < 3; ++c) F(f, c) = sub.vertex_to_parent[sub.mesh.F(f, c)];
-    if (F.rows() == 0)
+    auto c = std::make_unique<RegionCleanup>(region_faces_from_vertices(mesh.V, mesh.F, mask));
+    if (c->F.rows() == 0)
       throw InputError(a.label + ": the label's " + std::to_string(verts.size()) +
                        " vertices contain no whole triangle of the surface; check that the label belongs to " + a.surface);
+    if (!c->is_disk())
+      throw InputError(a.label + " on " + a.surface + ": " + c->problem() +
+                       "; the square map needs one disk: check that the label is this surface's cortex with the medial "
+                       "wall left out" +
+                       (c->holes_unfilled > 0 ? std::string(", and fill the holes too large to fill automatically") : ""));
     *source = "faces inside label " + a.label;
+    MatrixXi F = c->F;
+    *cleanup = std::move(c);
     return F;
   }
   if (!a.patch.empty()) {
@@ -85,6 +94,31 @@ MatrixXi region_faces(const FlattenArgs& a, const io::Surface& surface, std::str
                      "or use `authalic sphere` for a closed surface");
   *source = "all faces of " + a.surface;
   return mesh.F;
+}
+
+// "region_cleanup" of the metrics JSON (--label): what region_faces_from_vertices changed
+// (core/region.h). "vertices" of holes: added to the label's whole faces; of islands and removed
+// fans: label vertices lost. Areas in mm^2.
+nlohmann::json region_cleanup_json(const RegionCleanup& c) {
+  return {{"summary", c.summary()},
+          {"label_vertices", c.label_vertices},
+          {"raw_faces", c.raw_faces},
+          {"raw_area_mm2", c.raw_area_mm2},
+          {"faces", c.F.rows()},
+          {"area_mm2", c.area_mm2},
+          {"max_hole_fraction", c.max_hole_fraction},
+          {"holes_filled",
+           {{"count", c.holes_filled}, {"vertices", c.hole_vertices_added}, {"faces", c.hole_faces_added}, {"area_mm2", c.hole_area_mm2}}},
+          {"islands_dropped",
+           {{"count", c.islands_dropped}, {"vertices", c.island_vertices}, {"faces", c.island_faces}, {"area_mm2", c.island_area_mm2}}},
+          {"pinch_vertices",
+           {{"in_label_faces", c.raw_pinch_vertices},
+            {"fixed", c.pinch_vertices_fixed},
+            {"faces_removed", c.pinch_faces_removed},
+            {"vertices_removed", c.pinch_vertices_removed},
+            {"area_mm2", c.pinch_area_mm2}}},
+          {"label_vertices_outside_region", c.label_vertices_outside},
+          {"region_vertices_outside_label", c.vertices_outside_label}};
 }
 
 void write_flat(const std::string& path, const MatrixXd& XY, const MatrixXi& F, const io::SurfaceWriteOptions& base,
@@ -121,7 +155,9 @@ void run(const FlattenArgs& a) {
   const io::Surface surface = io::read_surface(a.surface);
   const TriMesh& mesh = surface.mesh;
   std::string region_source;
-  const MatrixXi region = region_faces(a, surface, &region_source);
+  std::unique_ptr<RegionCleanup> cleanup;
+  const MatrixXi region = region_faces(a, surface, &region_source, &cleanup);
+  if (cleanup) info("flatten: " + a.label + ": " + cleanup->summary());
   for (Eigen::Index f = 0; f < region.rows(); ++f)
     for (int c = 0; c < 3; ++c)
       if (region(f, c) < 0 || region(f, c) >= mesh.num_vertices())
@@ -145,6 +181,7 @@ void run(const FlattenArgs& a) {
   options.flow.fixed_steps = a.fixed_steps;
   options.flow.max_iterations = a.iterations;
   options.flow.polish = !a.no_polish;
+  options.stretch_start = a.start == "stretch";
   if (!a.density.empty()) options.density = io::read_per_vertex(a.density, mesh.num_vertices());
 
   SquareMapResult r;
@@ -154,6 +191,16 @@ void run(const FlattenArgs& a) {
     throw InputError(a.surface + " (" + region_source + "): " + e.what());
   }
   const double seconds_map = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // Acceptance (core/metrics.h) before anything is written: a map that is not authalic is a
+  // failure (exit 3), never a success with a note.
+  const MapMetrics final_metrics = map_metrics(r.V, r.UV, r.F, MapDomain::Square, a.k);
+  const MapMetrics accept_metrics = a.k == 32 ? final_metrics : map_metrics(r.V, r.UV, r.F, MapDomain::Square, 32);
+  const std::string problem = authalic_acceptance_problem(accept_metrics, r.flow.final_vertex_mean, options.density.size() == 0);
+  const std::string failure = a.surface + " (" + region_source + "): the map is not authalic: " + problem;
+  if (!problem.empty() && !a.keep_failed)
+    throw ProcessingError(failure + "; nothing was written. Try more passes (--passes 6) or a finer grid (--grid 1024); "
+                          "--keep-failed writes the map for inspection, marked as failed");
 
   // Outputs: flat surface in mm (area = cortical area), uv in [0, 1]^2, FreeSurfer patch.
   const double scale = std::sqrt(r.surface_area / r.width);
@@ -166,7 +213,8 @@ void run(const FlattenArgs& a) {
                  {"authalic_source", a.surface},
                  {"authalic_region", region_source},
                  {"authalic_input_vertices", std::to_string(r.num_input_vertices)},
-                 {"authalic_cortical_area_mm2", std::to_string(r.surface_area)}};
+                 {"authalic_cortical_area_mm2", std::to_string(r.surface_area)},
+                 {"authalic_acceptance", problem.empty() ? "passed" : "FAILED: " + problem}};
   write_flat(a.out, r.UV * scale, r.F, wo,
              "mm: the flat square's area equals the cortical area (" + std::to_string(r.surface_area) + " mm^2)");
   if (!a.uv.empty()) write_flat(a.uv, r.UV, r.F, wo, "unit square [0,1]^2 (x right, y up)");
@@ -188,7 +236,6 @@ void run(const FlattenArgs& a) {
     io::write_freesurfer_patch(a.fs_patch, verts, P);
   }
 
-  const MapMetrics final_metrics = map_metrics(r.V, r.UV, r.F, MapDomain::Square, a.k);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   nlohmann::json j = {{"surface", a.surface},
                       {"region", region_source},
@@ -212,6 +259,17 @@ void run(const FlattenArgs& a) {
                       {"flips", r.flips},
                       {"metrics", metrics_json(final_metrics)},
                       {"seconds", {{"map", seconds_map}, {"initial_map", r.seconds_initial}, {"flow", r.seconds_flow}, {"total", seconds}}}};
+  if (cleanup) j["region_cleanup"] = region_cleanup_json(*cleanup);
+  const AuthalicAcceptance limits;
+  j["acceptance"] = {{"passed", problem.empty()},
+                     {"problem", problem},
+                     {"limits",
+                      {{"flips", 0},
+                       {"element_cv_32x32", limits.max_element_cv},
+                       {"vertex_ln_area_abs_mean", limits.max_vertex_ln_area}}}};
+  j["initial_map"]["stretch_energy"] = {{"iterations", r.stretch.iterations},
+                                        {"face_ln_stretch_abs_mean_before", r.stretch.initial_log_stretch},
+                                        {"face_ln_stretch_abs_mean_after", r.stretch.final_log_stretch}};
   if (!a.metrics.empty()) {
     j["initial_metrics"] = metrics_json(map_metrics(r.V, r.UV_initial, r.F, MapDomain::Square, a.k));
     write_json_file(a.metrics, j);
@@ -249,6 +307,7 @@ void run(const FlattenArgs& a) {
        << a.k << "x" << a.k << "), per-face mean |ln area ratio| " << final_metrics.face_ln_area.mean
        << ", per-vertex mean " << final_metrics.vertex_ln_area.mean << " (p99 " << final_metrics.vertex_ln_area.p99 << "), "
        << r.flow.iterations << " passes + " << r.flow.polish_iterations << " polish steps, " << seconds << " s";
+  if (!problem.empty()) throw ProcessingError(failure + "; written for inspection (--keep-failed), marked as failed");
   if (global_options().json) {
     std::cout << j.dump(2) << '\n';
   } else {
@@ -272,16 +331,27 @@ void setup(CLI::App& parent) {
       ->required();
   auto* g1 = sub->add_option("--faces-from", a->faces_from,
                              "Take the region's triangles from this surface on the same vertices (e.g. FreeSurfer's flat map)");
-  auto* g2 = sub->add_option("--label", a->label, "Cortex region as vertices: FreeSurfer .label, GIFTI label or shape mask");
+  auto* g2 = sub->add_option("--label", a->label,
+                             "Cortex region as vertices: FreeSurfer .label, GIFTI label or shape mask. Its whole triangles are "
+                             "cleaned into one disk (largest piece kept, holes below 1 % of its area filled, pinch vertices "
+                             "resolved) and what changed is reported");
   auto* g3 = sub->add_option("--patch", a->patch, "Cortex region as a FreeSurfer patch (its vertices)");
   g1->excludes(g2)->excludes(g3);
   g2->excludes(g3);
+  sub->add_flag("--keep-failed", a->keep_failed,
+                "Expert: write the outputs even when the map fails its acceptance (0 flipped triangles, element CV <= 0.01 "
+                "at 32x32, per-vertex mean |ln area ratio| <= 0.01), marked FAILED in their metadata; the exit code is still 3");
+  sub->add_option("--start", a->start,
+                  "Start of the flow: stretch (conformal map, then stretch-energy iterations, Yueh et al. 2019) or conformal")
+      ->check(CLI::IsMember({"stretch", "conformal"}))
+      ->capture_default_str();
   sub->add_option("--uv", a->uv, "Also write the map in unit-square coordinates [0,1]^2 (GIFTI)");
   sub->add_option("--initial", a->initial, "Also write the conformal initial map in [0,1]^2 (GIFTI)");
   sub->add_option("--fs-patch", a->fs_patch, "Also write a FreeSurfer flat patch (x,y in mm) of the region's input vertices");
   sub->add_option("--metrics", a->metrics,
                   "Write distortion metrics (JSON): flips, per-face/per-vertex |ln area ratio|, Upsilon/Lambda, element CV "
-                  "over a K x K grid (element areas in mm^2)");
+                  "over a K x K grid (element areas in mm^2); with --label also region_cleanup (holes filled, islands dropped, "
+                  "pinch vertices fixed)");
   sub->add_option("--png", a->png, "Write a PNG of the flat map shaded by sulcal depth, with the K x K element grid");
   sub->add_option("--histogram", a->histogram, "Write a PNG histogram of the distortion metrics Upsilon and Lambda");
   sub->add_option("--shading", a->shading,

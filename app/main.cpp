@@ -50,7 +50,13 @@ void info(const std::string& line) {
 
 ProgressFn terminal_progress() {
   const auto& g = global_options();
-  if (g.quiet || g.json || !::isatty(STDERR_FILENO)) return {};
+  if (g.quiet || g.json) return {};
+  if (!::isatty(STDERR_FILENO)) {
+    // Not a terminal (a log file, a pipe): one line per step that says something, no bar.
+    return [](const std::string& stage, double, const std::string& message) {
+      if (!message.empty()) std::fprintf(stderr, "%s: %s\n", stage.c_str(), message.c_str());
+    };
+  }
   return [](const std::string& stage, double fraction, const std::string& message) {
     if (fraction >= 0) {
       const int width = 30;

@@ -1,6 +1,8 @@
 // Map distortion metrics (see core/metrics.h for the definitions, shared with evalmap.py).
 #include "core/metrics.h"
 
+#include <sstream>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -255,6 +257,22 @@ MapMetrics map_metrics(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F,
     m.element_max = cells.maxCoeff() / mean;
   }
   return m;
+}
+
+std::string authalic_acceptance_problem(const MapMetrics& m, double vertex_mean, bool check_element_cv,
+                                        const AuthalicAcceptance& limits) {
+  // On a coarse mesh an element holds few triangles and its area varies by their own noise:
+  // allow 3 standard errors of that (per-face SD of ln ratio / sqrt(faces per element)).
+  const double faces_per_element = double(m.faces) / std::max(1, m.element_cols * m.element_rows);
+  const double cv_limit = std::max(limits.max_element_cv, 3.0 * m.face_ln_area_sd / std::sqrt(std::max(1.0, faces_per_element)));
+  const bool cv_bad = check_element_cv && !(m.element_cv <= cv_limit);
+  const bool vertex_bad = !(vertex_mean <= limits.max_vertex_ln_area);
+  if (m.flips == 0 && !cv_bad && !vertex_bad) return {};
+  std::ostringstream s;
+  s << m.flips << " flipped triangles (limit 0), element CV " << m.element_cv << " (" << m.element_cols << "x"
+    << m.element_rows << (check_element_cv ? ", limit " + std::to_string(cv_limit).substr(0, 6) : ", not checked")
+    << "), per-vertex mean |ln area ratio| " << vertex_mean << " (limit " << limits.max_vertex_ln_area << ")";
+  return s.str();
 }
 
 }  // namespace authalic

@@ -52,6 +52,20 @@ struct MapMetrics {
   double outside_fraction = 0;   // domain area of the faces outside the domain rectangle / ΣA2
 };
 
+// Acceptance of an authalic map: what a result must reach to be returned as a success.
+struct AuthalicAcceptance {
+  // Element-area CV (metrics' K x K grid; skipped under measure control): this, or on a coarse
+  // mesh 3 x (per-face SD of ln area ratio) / sqrt(faces per element) if larger.
+  double max_element_cv = 0.01;
+  double max_vertex_ln_area = 0.01;  // per-vertex mean |ln area ratio| against the map's own target
+};
+// Empty when the map passes: 0 flipped triangles, element CV and per-vertex error within the
+// limits (vertex_mean: the per-vertex mean |ln ratio| against the map's target measure, e.g. the
+// flow's report; check_element_cv false for a measure-controlled map, whose elements are meant to
+// differ). Otherwise the measured numbers beside the limits, for a one-line error.
+std::string authalic_acceptance_problem(const MapMetrics& m, double vertex_mean, bool check_element_cv,
+                                        const AuthalicAcceptance& limits = {});
+
 // Per-face signed ln area ratio (NaN for faces with zero domain area). UV: #V x >= 2 (planar,
 // absolute areas) or #V x 3 on a sphere (sphere = true: chord triangles of the unit-normalised points).
 VectorXd face_log_area_ratio(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F, bool sphere = false);

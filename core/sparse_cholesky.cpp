@@ -36,6 +36,18 @@ bool SpdSolver::compute(const SparseMatrix& A) {
   return impl_->ok;
 }
 
+bool SpdSolver::refactor(const SparseMatrix& A) {
+  // Same pattern as the last compute(): keep its ordering and symbolic analysis (METIS on a 150k
+  // mesh costs as much as the numeric factorisation).
+  if (!impl_->ok) return compute(A);
+  if (impl_->use_fallback)
+    impl_->fallback.factorize(A);
+  else
+    impl_->cholmod.factorize(A);
+  impl_->ok = (impl_->use_fallback ? impl_->fallback.info() : impl_->cholmod.info()) == Eigen::Success;
+  return impl_->ok;
+}
+
 bool SpdSolver::ok() const { return impl_->ok; }
 
 MatrixXd SpdSolver::solve(const MatrixXd& B) const {

@@ -19,6 +19,8 @@ class SpdSolver {
 
   // Factorises A; false if neither CHOLMOD nor the fallback succeeds.
   bool compute(const SparseMatrix& A);
+  // Factorises A, which has the sparsity pattern of the last compute(), reusing its ordering.
+  bool refactor(const SparseMatrix& A);
   bool ok() const;
   MatrixXd solve(const MatrixXd& B) const;
 

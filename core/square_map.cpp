@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/stretch_energy.h"
 
 namespace authalic {
 
@@ -97,11 +98,26 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   ConformalMapResult init = conformal_rectangle_map(V, F, b);
   const auto t1 = std::chrono::steady_clock::now();
   R.surface_area = face_areas(init.V, init.F).sum();
+  {
+    std::ostringstream msg;
+    msg << "conformal map (" << to_string(init.weights) << " weights): " << count_flipped(init.UV, init.F, 0.0)
+        << " flipped triangles, " << init.cotangent_flips << " with cotangent weights";
+    report(progress, "initial", -1, msg.str());
+  }
 
   FlowOptions fo = opt.flow;
   fo.width = opt.width;
   if (opt.density.size() > 0) fo.density = extend_to_inserted(opt.density, init).col(0);
-  FlowResult flow = authalic_flow(init.V, init.F, init.UV, init.side_mask, fo, progress);
+  MatrixXd start = init.UV;
+  if (opt.stretch_start) {
+    const VectorXd target = target_face_measure(init.V, init.F, fo.density, opt.width);
+    start = stretch_energy_map(init.V, init.F, target, init.UV, init.side_mask, opt.stretch, &R.stretch);
+    std::ostringstream msg;
+    msg << "stretch-energy start: " << R.stretch.iterations << " iterations, mean |ln stretch| per face "
+        << R.stretch.initial_log_stretch << " -> " << R.stretch.final_log_stretch;
+    report(progress, "initial", -1, msg.str());
+  }
+  FlowResult flow = authalic_flow(init.V, init.F, start, init.side_mask, fo, progress);
   R.seconds_initial = std::chrono::duration<double>(t1 - t0).count();
   R.seconds_flow = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
 
@@ -118,8 +134,11 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   R.initial.UV.resize(0, 2);
   R.flips = count_flipped(R.UV, R.F, 1e-12 * opt.width / std::max<Eigen::Index>(1, R.F.rows()));
   if (R.flips > 0)
-    throw ProcessingError("square map: " + std::to_string(R.flips) +
-                          " triangles are still flipped after repair; the region may contain degenerate triangles");
+    throw ProcessingError("square map: the flow left " + std::to_string(R.flips) +
+                          " folded triangles that the repair could not remove (per-vertex mean |ln area ratio| " +
+                          std::to_string(R.flow.final_vertex_mean) +
+                          "); the map is not authalic. Check the region for degenerate triangles, or try a finer grid "
+                          "(--grid 1024)");
   return R;
 }
 

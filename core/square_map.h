@@ -25,6 +25,7 @@
 #include "core/conformal_map.h"
 #include "core/mesh.h"
 #include "core/progress.h"
+#include "core/stretch_energy.h"
 
 namespace authalic {
 
@@ -35,6 +36,10 @@ struct SquareMapOptions {
   bool anatomical_anchor = true;  // rule 2 above; false: the boundary starts at its first vertex at (0, 0)
   bool orient_outward = true;     // rule 1 above
   bool sliding_initial_boundary = false;  // see RectangleBoundaryMap::sliding_boundary
+  // Stretch-energy iterations between the conformal map and the flow (core/stretch_energy.h):
+  // a roughly authalic start, so the flow only corrects what is left.
+  bool stretch_start = true;
+  StretchEnergyOptions stretch;
 };
 
 struct SquareMapResult {
@@ -50,6 +55,7 @@ struct SquareMapResult {
   bool faces_reversed = false;
   int anterior_vertex = -1;  // the most anterior region vertex (rule 2)
   ConformalMapResult initial;  // split counts, weights used (V/F/UV moved into the fields above)
+  StretchEnergyReport stretch;
   FlowReport flow;
   int flips = 0;             // flipped or degenerate faces of UV (0 unless something failed)
   double seconds_initial = 0;  // wall time of the conformal initial map

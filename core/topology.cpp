@@ -11,24 +11,11 @@
 #include <unordered_map>
 
 #include "core/mesh.h"
+#include "core/union_find.h"
 
 namespace authalic {
 
 namespace {
-
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(int a, int b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // smallest index is the root: deterministic
-  }
-};
 
 std::int64_t key(int a, int b, int n) { return static_cast<std::int64_t>(a) * n + b; }
 

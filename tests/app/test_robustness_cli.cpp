@@ -61,28 +61,37 @@ std::string run_args(const std::string& out) {
 
 // ---- flow budget -------------------------------------------------------------------------------
 
-TEST(RobustnessCli, FlattenSaysWhenTheFlowStoppedBeforeItsTolerance) {
+TEST(RobustnessCli, FlattenRefusesAMapThatIsNotAuthalic) {
   const std::string dir = test::temp_dir("robust-flow");
   const std::string patch = write_patch(dir);
   std::string out;
-  // Zero passes and no polish: the conformal map is returned, and the tool must say so.
-  ASSERT_EQ(test::run_command(bin() + " flatten " + q(patch) + " " + q(dir + "/flat.surf.gii") + " --passes 0 --no-polish --metrics " +
-                                  q(dir + "/m.json"),
-                              &out),
-            0)
-      << out;
-  EXPECT_NE(out.find("the flow stopped (iteration limit) before its tolerance was met"), std::string::npos) << out;
+  // The conformal start with no flow and no polish is not authalic: exit 3, one line with the
+  // measured numbers and their limits, and nothing written.
+  const std::string base = bin() + " flatten " + q(patch) + " " + q(dir + "/flat.surf.gii") +
+                           " --start conformal --passes 0 --no-polish --metrics " + q(dir + "/m.json");
+  EXPECT_EQ(test::run_command(base, &out), 3) << out;
+  EXPECT_NE(out.find("the map is not authalic"), std::string::npos) << out;
+  EXPECT_NE(out.find("element CV"), std::string::npos) << out;
+  EXPECT_NE(out.find("(limit 0.01)"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/flat.surf.gii"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/m.json"));
+  // --keep-failed writes the map for inspection, marked as failed, and still exits 3.
+  EXPECT_EQ(test::run_command(base + " --keep-failed", &out), 3) << out;
+  ASSERT_TRUE(std::filesystem::exists(dir + "/flat.surf.gii"));
   std::ifstream in(dir + "/m.json");
   const nlohmann::json j = nlohmann::json::parse(in);
-  EXPECT_EQ(j["flow"]["converged"], false);
-  EXPECT_EQ(j["flow"]["stop_reason"], "iteration limit");
-  EXPECT_GT(j["flow"]["final_vertex_ln_area_abs"]["mean"].get<double>(), 0.004);  // the distortion reached
-  EXPECT_EQ(j["flips"], 0);
-  // With its normal budget: the note is printed exactly when the JSON says converged = false.
-  ASSERT_EQ(test::run_command(bin() + " flatten " + q(patch) + " " + q(dir + "/flat2.surf.gii") + " --passes 8 --metrics " + q(dir + "/m2.json"), &out), 0)
+  EXPECT_EQ(j["acceptance"]["passed"], false);
+  EXPECT_GT(j["metrics"]["element_cv"].get<double>(), 0.01);
+  std::ifstream gii(dir + "/flat.surf.gii");
+  const std::string text((std::istreambuf_iterator<char>(gii)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("FAILED: "), std::string::npos);
+  // With its normal budget the same patch passes: exit 0, acceptance recorded as passed.
+  ASSERT_EQ(test::run_command(bin() + " flatten " + q(patch) + " " + q(dir + "/flat2.surf.gii") + " --metrics " + q(dir + "/m2.json"), &out), 0)
       << out;
   std::ifstream in2(dir + "/m2.json");
   const nlohmann::json j2 = nlohmann::json::parse(in2);
+  EXPECT_EQ(j2["acceptance"]["passed"], true);
+  EXPECT_LE(j2["metrics"]["element_cv"].get<double>(), 0.01);
   EXPECT_EQ(out.find("the flow stopped") == std::string::npos, j2["flow"]["converged"].get<bool>()) << out;
 }
 

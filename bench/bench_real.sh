@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# Real-mesh benchmark: the authalic square map on a real subject's native-resolution FreeSurfer
+# surfaces (../shared/data/fs741: 164,000 vertices per hemisphere, uncut cortex labels).
+#   bench/bench_real.sh [BUILD_DIR]     (default: build; needs ../shared/data)
+# Inputs: R1 = lh.cortex.label (90 % of the white area, one boundary loop: the medial wall's
+# border), R2 = lh.cortex96_mask.shape.gii (96 %: almost a closed sphere); each on lh.white and
+# lh.pial. Every map is measured by `authalic metrics` (inside flatten) and independently by
+# ../shared/tools/evalmap.py --inserted auto. A map that fails its acceptance exits 3 and is
+# written with --keep-failed, so its numbers are printed too. Prints one row per input and the
+# requirements with PASS/FAIL.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${1:-build}
+bin="$PWD/$build/authalic"
+data=../shared/data/fs741
+evalmap=../shared/tools/evalmap.py
+py=/usr/bin/python3
+[ -x "$bin" ] || { echo "bench_real: $bin not found; build first (scripts/build.sh)" >&2; exit 2; }
+[ -f "$data/lh.white.surf.gii" ] || { echo "bench_real: $data not found (../shared/data is needed)" >&2; exit 2; }
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+# run NAME SURFACE REGION : flatten with /usr/bin/time; leaves $work/NAME.{json,uv.surf.gii,time,code}
+run() {
+  local name=$1 surf=$2 region=$3
+  set +e
+  /usr/bin/time -v "$bin" flatten "$surf" "$work/$name.surf.gii" --uv "$work/$name.uv.surf.gii" --label "$region" \
+    --metrics "$work/$name.json" --keep-failed -q 2>"$work/$name.time"
+  echo $? >"$work/$name.code"
+  set -e
+}
+for s in white pial; do
+  run "R1-$s" "$data/lh.$s.surf.gii" "$data/lh.cortex.label"
+  run "R2-$s" "$data/lh.$s.surf.gii" "$data/lh.cortex96_mask.shape.gii"
+done
+for n in R1-white R1-pial R2-white R2-pial; do
+  surf="$data/lh.${n#*-}.surf.gii"
+  if [ -f "$work/$n.uv.surf.gii" ]; then
+    $py "$evalmap" "$surf" "$work/$n.uv.surf.gii" --domain square --k 32 --inserted auto --json >"$work/$n.eval.json" 2>/dev/null ||
+      echo '{}' >"$work/$n.eval.json"
+  else
+    echo '{}' >"$work/$n.eval.json"
+  fi
+done
+
+$py - "$work" <<'EOF'
+import json, os, re, sys
+work = sys.argv[1]
+def timing(name):
+    t = open(os.path.join(work, name + ".time")).read()
+    wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (\S+)", t).group(1).split(":")
+    wall = sum(float(x) * 60 ** i for i, x in enumerate(reversed(wall)))
+    cpu = sum(float(x) for x in re.findall(r"(?:User|System) time \(seconds\): (\S+)", t))
+    rss = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", t).group(1)) / 1024
+    return wall, cpu, rss
+def ev(j, *keys):
+    for k in keys:
+        if not isinstance(j, dict) or k not in j: return float("nan")
+        j = j[k]
+    return j
+print("| map | exit | wall s | cpu s | RSS MB | flips | element CV 32x32 | per-face mean | per-vertex mean | per-vertex p99 | stretch-energy steps | evalmap flips | evalmap CV 32 | evalmap face mean |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+reqs = []
+for n in ["R1-white", "R1-pial", "R2-white", "R2-pial"]:
+    code = int(open(os.path.join(work, n + ".code")).read())
+    wall, cpu, rss = timing(n)
+    p = os.path.join(work, n + ".json")
+    j = json.load(open(p)) if os.path.exists(p) else {}
+    e = json.load(open(os.path.join(work, n + ".eval.json")))
+    m = j.get("metrics", {})
+    cv, face = m.get("element_cv", float("nan")), ev(m, "face_ln_area_abs", "mean")
+    vm, vp = ev(m, "vertex_ln_area_abs", "mean"), ev(m, "vertex_ln_area_abs", "p99")
+    flips = j.get("flips", "-")
+    its = ev(j, "initial_map", "stretch_energy", "iterations")
+    print(f"| {n} | {code} | {wall:.2f} | {cpu:.2f} | {rss:.0f} | {flips} | {cv:.5f} | {face:.4f} | {vm:.4f} | {vp:.4f} | {its} | "
+          f"{e.get('flips', 'nan')} | {e.get('element_area_cv_k32', float('nan')):.5f} | {e.get('ln_area_ratio_abs_mean', float('nan')):.4f} |")
+    reqs += [(f"{n} exit code", code, 0), (f"{n} flips", flips if flips != "-" else 1e9, 0),
+             (f"{n} element CV", cv, 0.005), (f"{n} per-vertex mean", vm, 0.01), (f"{n} per-face mean", face, 0.05),
+             (f"{n} wall s", wall, 15.0), (f"{n} peak MB", rss, 1536)]
+print("\nrequirements (real-mesh issue, flatten):")
+for name, value, limit in reqs:
+    ok = value == value and value <= limit
+    print(f"  {'PASS' if ok else 'FAIL'}  {name}: {value:.4g} (<= {limit})")
+EOF

@@ -1,0 +1,46 @@
+#pragma once
+// A roughly authalic start for the area-restoring flow: fixed-point iterations of the stretch
+// energy minimisation of Yueh, Lin, Wu & Yau 2019 (J. Sci. Comput. 78, Algorithm 1), with the
+// boundary held where the initial map put it.
+//
+// The stretch energy E_S(f) = ½ Σ_τ σ(τ) E_D,τ(f), with σ(τ) = |f(τ)| / |τ| the triangle's
+// stretch (map area over target measure, both normalised to equal totals; Yueh's 1/σ_{f⁻¹}), is
+// minimised by authalic maps. Its fixed-point iteration solves the Laplace problem with the
+// surface's cotangent weights multiplied by the current stretch of each triangle: a triangle
+// squeezed by the map (σ < 1) gets soft edges and is pushed open, an inflated one is pulled in.
+// Here the factor accumulates over the iterations (w_k = w_0 Π σ_j), so a face still squeezed
+// keeps softening; the plain iteration overshoots after one step on the cortex (measured on
+// fsaverage5 and fs741). The cotangent weights are clamped to a small positive floor, so with the
+// boundary held every iterate is a Tutte embedding with positive weights of a disk with a convex
+// boundary (Floater 2003): no triangle can fold, however large the compression of the start (the
+// failure of a uniform-grid flow on a native cortex, where the conformal start squeezes parts of
+// the cortex by 10^3).
+#include "core/mesh.h"
+
+namespace authalic {
+
+struct StretchEnergyOptions {
+  int max_iterations = 10;
+  double exponent = 1.0;        // each step multiplies the weights by σ^exponent
+  double min_weight = 1e-2;     // floor of the cotangent weights, relative to their mean
+  double stop_improvement = 0.8;  // stop when a step keeps more than this share of the error
+  bool cumulative = true;       // weights multiply up over iterations (else from the last map only)
+  bool sliding_boundary = false;  // side vertices slide along their side (corners fixed)
+};
+
+struct StretchEnergyReport {
+  int iterations = 0;
+  double initial_log_stretch = 0;  // mean |ln σ| per face, area weighted
+  double final_log_stretch = 0;
+};
+
+// Inputs: V #V x 3 surface, F #F x 3 faces of a disk (oriented so UV0 is counter-clockwise),
+// face_target #F measure each face should receive (its area, or area x density), UV0 #V x 2
+// initial map without flipped triangles in [0, W] x [0, 1], side_mask #V RectangleSide bits
+// (core/conformal_map.h) of the boundary vertices.
+// Output: #V x 2 map; the vertices not used by F and the fixed ones keep UV0.
+MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd& face_target, const MatrixXd& UV0,
+                            const VectorXi& side_mask, const StretchEnergyOptions& options = {},
+                            StretchEnergyReport* report = nullptr);
+
+}  // namespace authalic
