@@ -83,10 +83,7 @@ struct Hemisphere {
   std::vector<int> cortex;      // region vertices
   MatrixXi cortex_faces;        // faces of the white surface inside the cortex region
   // map
-  MatrixXd flat_V;              // #V' x 3 positions of the map's vertices on the surface (mm)
-  MatrixXd uv;                  // #V' x 2 in [0,1]^2
-  MatrixXi flat_F;
-  FlowReport flow;
+  SquareMapResult map;          // the authalic square map (V, F, UV in [0,1]^2, flow report)
   MapMetrics metrics;
   // PET
   SamplingResult sampling;
@@ -126,6 +123,10 @@ std::string load_hemisphere(Hemisphere& h, const std::string& white, const std::
       throw InputError(cortex + ": has " + std::to_string(region.mesh.num_vertices()) + " vertices but " + white + " has " +
                        std::to_string(n) + "; a cortex face set must be on the white surface's vertices");
     h.cortex_faces = region.mesh.F;
+    const TopologyReport t = analyze_topology(h.white.mesh.V, h.cortex_faces);
+    if (!t.is_disk())
+      throw InputError(cortex + ": the cortex region on " + white + " is not one disk (" + t.summary() +
+                       "); the map needs a region with one boundary loop, e.g. FreeSurfer's ?h.cortex.label");
   } else {
     // A label or mask (vertices): its whole triangles, cleaned up into one disk (islands dropped,
     // small holes filled, pinch vertices resolved), as `authalic flatten --label`.
@@ -151,10 +152,6 @@ std::string load_hemisphere(Hemisphere& h, const std::string& white, const std::
   h.cortex.clear();
   for (int v = 0; v < n; ++v)
     if (used[v]) h.cortex.push_back(v);
-  const TopologyReport t = analyze_topology(h.white.mesh.V, h.cortex_faces);
-  if (!t.is_disk())
-    throw InputError(cortex + ": the cortex region on " + white + " is not one disk (" + t.summary() +
-                     "); the map needs a region with one boundary loop, e.g. FreeSurfer's ?h.cortex.label");
   return note;
 }
 
@@ -192,11 +189,18 @@ namespace {
 // outward, frontal pole at the top middle, so the right hemisphere comes out as the mirror image
 // of the left, as a reader of the two flat maps side by side expects.
 void map_hemisphere(Hemisphere& h, const ProgressFn& progress) {
-  SquareMapResult r = square_map(h.white.mesh.V, h.cortex_faces, SquareMapOptions{}, progress);
-  h.flat_V = std::move(r.V);
-  h.flat_F = std::move(r.F);
-  h.uv = std::move(r.UV);
-  h.flow = r.flow;
+  h.map = square_map(h.white.mesh.V, h.cortex_faces, SquareMapOptions{}, progress);
+}
+
+// Acceptance of a map before anything is computed from it (core/metrics.h): a failed map stops
+// the run with exit 3, naming the map and its numbers. m: the map's metrics at the run's K; when
+// K is not 32 (the acceptance grid), V (non-null), UV and F measure it again at 32.
+void require_authalic(const std::string& what, const MapMetrics& m, const MatrixXd* V, const MatrixXd& UV, const MatrixXi& F,
+                      MapDomain domain) {
+  const MapMetrics at32 = V ? map_metrics(*V, UV, F, domain, 32) : m;
+  const std::string problem = authalic_acceptance_problem(at32, at32.vertex_ln_area.mean, true);
+  if (!problem.empty())
+    throw ProcessingError(what + ": the map is not authalic: " + problem + "; no z-scores or report were written");
 }
 
 // The element image of one block as a K x K NIfTI (voxel (col, row)); the affine is a plain
@@ -263,9 +267,11 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   for (Hemisphere& h : hemis) {
     log.begin("authalic square map (" + h.name + ")");
     map_hemisphere(h, progress);
-    h.metrics = map_metrics(h.flat_V, h.uv, h.flat_F, MapDomain::Square, options.k);
+    h.metrics = map_metrics(h.map.V, h.map.UV, h.map.F, MapDomain::Square, options.k);
     log.note("flips " + std::to_string(h.metrics.flips) + ", element-area CV " + std::to_string(h.metrics.element_cv) +
-             ", flow " + h.flow.stop_reason);
+             ", flow " + h.map.flow.stop_reason);
+    require_authalic(h.name + " hemisphere (" + (h.left ? in.lh_white : in.rh_white) + ")", h.metrics,
+                     options.k == 32 ? nullptr : &h.map.V, h.map.UV, h.map.F, MapDomain::Square);
     log.end(summary);
   }
 
@@ -275,8 +281,8 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   MapMetrics rect_metrics;
   if (options.rectangle) {
     log.begin("authalic 1:2 rectangle (both hemispheres)");
-    rect = hemisphere_rectangle_map(TriMesh{hemis[0].white.mesh.V, hemis[0].cortex_faces},
-                                    TriMesh{hemis[1].white.mesh.V, hemis[1].cortex_faces}, RectangleMapOptions{}, progress);
+    // The two square maps stretched to their shares (core/rectangle_map.h): no map is recomputed.
+    rect = hemisphere_rectangles_from_squares(hemis[0].map, hemis[1].map);
     const Eigen::Index nl = rect.left.V.rows();
     MatrixXd V(nl + rect.right.V.rows(), 3), UV(nl + rect.right.V.rows(), 2);
     V << rect.left.V, rect.right.V;
@@ -287,6 +293,8 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     log.note("left part width " + std::to_string(rect.split) + " of 2; flips " + std::to_string(rect_metrics.flips) +
              ", element-area CV " + std::to_string(rect_metrics.element_cv) + " (" + std::to_string(2 * options.k) + "x" +
              std::to_string(options.k) + ")");
+    require_authalic("the 1:2 rectangle of both hemispheres", rect_metrics, options.k == 32 ? nullptr : &V, UV, F,
+                     MapDomain::Rectangle);
     log.end(summary);
   }
 
@@ -339,7 +347,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   table.metadata["software"] = software();
   table.metadata["sampling"] = hemis[0].sampling.method;
   for (Hemisphere& h : hemis) {
-    const ElementMap m = prepare_element_map(h.white.mesh.V, h.cortex_faces, h.uv, h.flat_F, h.pet, ElementDomain::Square,
+    const ElementMap m = prepare_element_map(h.white.mesh.V, h.cortex_faces, h.map.UV, h.map.F, h.pet, ElementDomain::Square,
                                              h.name + " square map");
     h.elements = compute_elements(m, table.grid, h.white.to_scanner);
     h.elements.block.hemisphere = h.name;
@@ -386,11 +394,11 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   for (Hemisphere& h : hemis) {
     const std::string hp = prefix + "_hemi-" + h.tag;
     // Flat map scaled so 1 mm^2 flat = 1 mm^2 cortex (on average).
-    const double area = face_areas(h.flat_V, h.flat_F).sum();
+    const double area = face_areas(h.map.V, h.map.F).sum();
     TriMesh flat;
-    flat.V = MatrixXd::Zero(h.uv.rows(), 3);
-    flat.V.leftCols(2) = h.uv * std::sqrt(area);
-    flat.F = h.flat_F;
+    flat.V = MatrixXd::Zero(h.map.UV.rows(), 3);
+    flat.V.leftCols(2) = h.map.UV * std::sqrt(area);
+    flat.F = h.map.F;
     io::SurfaceWriteOptions wo;
     wo.anatomical_structure = h.left ? "CortexLeft" : "CortexRight";
     wo.geometric_type = "Flat";
@@ -476,14 +484,14 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       ReportHemisphere rh;
       rh.name = h.name;
       rh.left = h.left;
-      rh.flat_uv = h.uv;
-      rh.faces = h.flat_F;
+      rh.flat_uv = h.map.UV;
+      rh.faces = h.map.F;
       rh.grid_cols = rh.grid_rows = K;
       rh.surface_V = h.pial.mesh.V;
       rh.surface_F = h.pial.mesh.F;
       rh.element_of_vertex = h.elements.vertex_element;
       // Per map vertex: the surface's values, NaN for vertices the map inserted (drawn gray).
-      rh.pet = VectorXd::Constant(h.uv.rows(), std::numeric_limits<double>::quiet_NaN());
+      rh.pet = VectorXd::Constant(h.map.UV.rows(), std::numeric_limits<double>::quiet_NaN());
       rh.pet.head(h.white.mesh.num_vertices()) = h.pet.head(h.white.mesh.num_vertices());
       rh.element_pet = block_values(h.elements.block);
       if (compare) rh.element_z.assign(cmp.z.begin() + b * table.grid.num_elements(), cmp.z.begin() + (b + 1) * table.grid.num_elements());

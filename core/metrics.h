@@ -55,8 +55,9 @@ struct MapMetrics {
 // Acceptance of an authalic map: what a result must reach to be returned as a success.
 struct AuthalicAcceptance {
   // Element-area CV (metrics' K x K grid; skipped under measure control): this, or on a coarse
-  // mesh 3 x (per-face SD of ln area ratio) / sqrt(faces per element) if larger.
+  // mesh 3 x coarse_face_sd / sqrt(faces per element) if larger.
   double max_element_cv = 0.01;
+  double coarse_face_sd = 0.1;  // per-face SD of ln area ratio of a good map (fsaverage5: 0.08)
   double max_vertex_ln_area = 0.01;  // per-vertex mean |ln area ratio| against the map's own target
 };
 // Empty when the map passes: 0 flipped triangles, element CV and per-vertex error within the

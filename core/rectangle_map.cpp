@@ -275,51 +275,60 @@ void check_disk(const MatrixXd& V, const MatrixXi& F, const std::string& what) {
 
 }  // namespace
 
-RectanglePart hemisphere_part_map(const TriMesh& cortex, double x0, double width, bool mirror, const FlowOptions& flow,
-                                  const ProgressFn& progress) {
-  MatrixXd V = cortex.V;
-  MatrixXi F = cortex.F;
-  if (mirror) {
-    // The right hemisphere as a left one: mirror x and reverse the triangles (outward again).
-    V.col(0) = -V.col(0);
-    F.col(1).swap(F.col(2));
-  }
-  // Anchor rule: the boundary vertex nearest to the most anterior (max y) cortex vertex goes to
-  // the middle of the top side.
-  const auto loops = boundary_loops(F, static_cast<int>(V.rows()));
-  if (loops.size() != 1) throw InputError("hemisphere cortex region has " + std::to_string(loops.size()) + " boundary loops; it must be one disk");
-  int front = -1;
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c)
-      if (front < 0 || V(F(f, c), 1) > V(front, 1)) front = F(f, c);
-  int anchor = loops[0][0];
-  for (int b : loops[0])
-    if ((V.row(b) - V.row(front)).squaredNorm() < (V.row(anchor) - V.row(front)).squaredNorm()) anchor = b;
-  RectanglePart part = map_disk(V, V, F, anchor, rectangle_top_middle(width), width, flow, 0, progress);
-  if (mirror) {
-    part.V.col(0) = -part.V.col(0);
-    part.F.col(1).swap(part.F.col(2));
-    part.UV.col(0) = width - part.UV.col(0).array();
-    part.UV_initial.col(0) = width - part.UV_initial.col(0).array();
-  }
-  part.UV.col(0).array() += x0;
-  part.UV_initial.col(0).array() += x0;
+RectanglePart rectangle_part_from_square(const SquareMapResult& square, double x0, double width) {
+  RectanglePart part;
+  part.V = square.V;
+  part.F = square.F;
+  // x -> x0 + width x scales every area by `width`: the square's area ratios all change by the
+  // same factor, so an authalic square is authalic on its share of the rectangle.
+  part.UV = square.UV;
+  part.UV.col(0) = (x0 + width * square.UV.col(0).array()).matrix();
+  part.UV_initial = square.UV_initial;
+  part.UV_initial.col(0) = (x0 + width * square.UV_initial.col(0).array()).matrix();
+  part.vertex_origin = VectorXi::Constant(square.V.rows(), -1);
+  for (int i = 0; i < square.num_input_vertices; ++i) part.vertex_origin[i] = i;
+  part.num_input_vertices = square.num_input_vertices;
   part.x0 = x0;
+  part.width = width;
+  part.area_mm2 = square.surface_area;
+  part.anchor_vertex = square.anterior_vertex;
+  part.flow = square.flow;
+  part.initial_flips = count_flipped(square.UV_initial, square.F);
   return part;
+}
+
+HemisphereRectangles hemisphere_rectangles_from_squares(const SquareMapResult& left, const SquareMapResult& right) {
+  const double al = left.surface_area, ar = right.surface_area;
+  if (!(al > 0) || !(ar > 0)) throw InputError("hemisphere cortex has zero area");
+  HemisphereRectangles out;
+  // Widths proportional to cortical area: each unit of rectangle area holds the same cortex.
+  out.split = 2.0 * al / (al + ar);
+  out.left = rectangle_part_from_square(left, 0.0, out.split);
+  out.right = rectangle_part_from_square(right, out.split, 2.0 - out.split);
+  return out;
 }
 
 HemisphereRectangles hemisphere_rectangle_map(const TriMesh& left, const TriMesh& right, const RectangleMapOptions& options,
                                               const ProgressFn& progress) {
   check_disk(left.V, left.F, "left hemisphere cortex");
   check_disk(right.V, right.F, "right hemisphere cortex");
-  const double al = face_areas(left.V, left.F).sum(), ar = face_areas(right.V, right.F).sum();
-  if (!(al > 0) || !(ar > 0)) throw InputError("hemisphere cortex has zero area");
-  HemisphereRectangles out;
-  // Widths proportional to cortical area: each unit of rectangle area holds the same cortex.
-  out.split = 2.0 * al / (al + ar);
-  out.left = hemisphere_part_map(left, 0.0, out.split, false, options.flow, progress);
-  out.right = hemisphere_part_map(right, out.split, 2.0 - out.split, true, options.flow, progress);
-  return out;
+  // Each hemisphere's square map (its anatomical rule: outward faces, frontal pole at the top
+  // middle, so the right part is the mirror image of the left), then stretched to its share.
+  // The right one is computed as the left one of its mirror image and mirrored back, so a right
+  // hemisphere that is the mirror of a left one gives exactly the mirrored map.
+  SquareMapOptions so;
+  so.flow = options.flow;
+  const SquareMapResult l = square_map(left.V, left.F, so, progress);
+  MatrixXd V = right.V;
+  MatrixXi F = right.F;
+  V.col(0) = -V.col(0);
+  F.col(1).swap(F.col(2));
+  SquareMapResult r = square_map(V, F, so, progress);
+  r.V.col(0) = -r.V.col(0);
+  r.F.col(1).swap(r.F.col(2));
+  r.UV.col(0) = (1.0 - r.UV.col(0).array()).matrix();
+  r.UV_initial.col(0) = (1.0 - r.UV_initial.col(0).array()).matrix();
+  return hemisphere_rectangles_from_squares(l, r);
 }
 
 WholeBrainRectangle whole_brain_rectangle_map(const TriMesh& mesh, const RectangleMapOptions& options, const ProgressFn& progress) {

@@ -28,6 +28,7 @@
 
 #include "core/authalic_flow.h"
 #include "core/mesh.h"
+#include "core/square_map.h"
 #include "core/progress.h"
 
 namespace authalic {
@@ -115,7 +116,8 @@ struct WholeBrainRectangle {
 WholeBrainRectangle whole_brain_rectangle_map(const TriMesh& mesh, const RectangleMapOptions& options = {},
                                               const ProgressFn& progress = {});
 
-// Form (b). Each hemisphere: its surface and its cortex faces (a disk; InputError otherwise).
+// Form (b). Each hemisphere: its surface and its cortex faces (a disk; InputError otherwise),
+// mapped by square_map and stretched onto its share of the rectangle (rectangle_part_from_square).
 struct HemisphereRectangles {
   RectanglePart left, right;
   double split = 1.0;  // w_L: the parts meet on x = split
@@ -123,9 +125,11 @@ struct HemisphereRectangles {
 HemisphereRectangles hemisphere_rectangle_map(const TriMesh& left_cortex, const TriMesh& right_cortex,
                                               const RectangleMapOptions& options = {}, const ProgressFn& progress = {});
 
-// A disk mapped onto [x0, x0 + width] x [0, 1] by the hemisphere rule above (conformal initial
-// map + flow), `mirror`: map the mirror image (x negated) and mirror u back (right hemispheres).
-RectanglePart hemisphere_part_map(const TriMesh& cortex, double x0, double width, bool mirror, const FlowOptions& flow,
-                                  const ProgressFn& progress = {});
+// A square map (core/square_map.h) stretched affinely onto [x0, x0 + width] x [0, 1]: every
+// area scales by `width`, so an authalic square stays authalic on its share of the rectangle.
+RectanglePart rectangle_part_from_square(const SquareMapResult& square, double x0, double width);
+// Form (b) from two square maps already computed (e.g. by the per-subject pipeline): left on
+// [0, w_L], right on [w_L, 2], w_L = 2 A_L / (A_L + A_R). No map is computed again.
+HemisphereRectangles hemisphere_rectangles_from_squares(const SquareMapResult& left, const SquareMapResult& right);
 
 }  // namespace authalic

@@ -2,29 +2,18 @@
 #include "core/stretch_energy.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 
-#include "core/conformal_map.h"
 #include "core/sparse_cholesky.h"
 
 namespace authalic {
 namespace {
 
-// Per half-edge (face f, corner c: the edge opposite c) cotangent weight ½ cot θ_c of the surface.
+// Per half-edge (face f, corner c: the edge opposite c) cotangent weight ½ cot θ_c of the surface,
+// clamped to `min_relative` of the mean |weight| so every weight is positive.
 MatrixXd surface_cot_weights(const MatrixXd& V, const MatrixXi& F, double min_relative) {
-  MatrixXd W(F.rows(), 3);
-  double sum = 0;
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const Eigen::Vector3d o = V.row(F(f, c)).transpose(), a = V.row(F(f, (c + 1) % 3)).transpose(),
-                            b = V.row(F(f, (c + 2) % 3)).transpose();
-      const Eigen::Vector3d u = a - o, v = b - o;
-      const double cr = u.cross(v).norm();
-      W(f, c) = cr > 0 ? 0.5 * u.dot(v) / cr : 0.0;
-      sum += std::abs(W(f, c));
-    }
-  const double floor = min_relative * sum / std::max<Eigen::Index>(1, 3 * F.rows());
+  const MatrixXd W = 0.5 * corner_angles(V, F).array().tan().inverse().matrix();
+  const double floor = min_relative * W.cwiseAbs().mean();
   return W.cwiseMax(floor);
 }
 
@@ -43,81 +32,59 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
                             const VectorXi& side_mask, const StretchEnergyOptions& opt, StretchEnergyReport* report) {
   const Eigen::Index nv = V.rows(), nf = F.rows();
   const MatrixXd W = surface_cot_weights(V, F, opt.min_weight);
+  // Unknowns: the vertices used by F that are not on the boundary (side_mask 0).
   std::vector<char> used(static_cast<std::size_t>(nv), 0);
   for (Eigen::Index f = 0; f < nf; ++f)
     for (int c = 0; c < 3; ++c) used[F(f, c)] = 1;
-  // Unknowns per coordinate: u is held on the left/right sides, v on the bottom/top sides, so a
-  // side vertex slides along its side (the natural boundary condition of the energy there).
-  std::array<std::vector<int>, 2> idx;
-  std::array<int, 2> m{0, 0};
-  for (int d = 0; d < 2; ++d) {
-    idx[d].assign(static_cast<std::size_t>(nv), -1);
-    const int held = d == 0 ? (kSideLeft | kSideRight) : (kSideBottom | kSideTop);
-    for (Eigen::Index v = 0; v < nv; ++v) {
-      const int mask = side_mask.size() ? side_mask[v] : 0;
-      const bool fixed = opt.sliding_boundary ? (mask & held) != 0 : mask != 0;
-      if (used[v] && !fixed) idx[d][v] = m[d]++;
-    }
-  }
+  std::vector<int> idx(static_cast<std::size_t>(nv), -1);
+  int m = 0;
+  for (Eigen::Index v = 0; v < nv; ++v)
+    if (used[v] && !(side_mask.size() && side_mask[v])) idx[v] = m++;
 
   MatrixXd UV = UV0.leftCols(2);
-  const double min_area = 1e-12 * signed_face_areas_2d(UV, F).sum() / std::max<Eigen::Index>(1, nf);
-  double err = mean_log_stretch(signed_face_areas_2d(UV, F), face_target);
+  VectorXd area = signed_face_areas_2d(UV, F);
+  const double min_area = 1e-12 * area.sum() / std::max<Eigen::Index>(1, nf);
+  const double st = face_target.sum();
+  double err = mean_log_stretch(area, face_target);
   if (report) report->initial_log_stretch = report->final_log_stretch = err;
-  VectorXd scale = VectorXd::Ones(nf);  // cumulative weight factor per face
-  std::array<SpdSolver, 2> solvers;     // the pattern is the same every iteration
-  for (int k = 0; k < opt.max_iterations; ++k) {
-    const VectorXd a = signed_face_areas_2d(UV, F);
-    const double sa = a.sum(), st = face_target.sum();
-    VectorXd trial = scale;
-    for (Eigen::Index f = 0; f < nf; ++f) {
-      const double sigma = std::max(1e-300, (a[f] / sa) / (face_target[f] / st));
-      trial[f] = (opt.cumulative ? scale[f] : 1.0) * std::pow(sigma, opt.exponent);
-    }
-    MatrixXd next = UV;
-    bool ok = true;
-    // With the whole boundary held, both coordinates share one matrix: factorise it once.
-    const int systems = opt.sliding_boundary ? 2 : 1;
-    for (int d = 0; d < systems && ok; ++d) {
-      std::vector<Eigen::Triplet<double>> t;
-      t.reserve(static_cast<std::size_t>(12 * nf));
-      MatrixXd rhs = MatrixXd::Zero(m[d], systems == 1 ? 2 : 1);
-      for (Eigen::Index f = 0; f < nf; ++f)
-        for (int c = 0; c < 3; ++c) {
-          const int i = F(f, (c + 1) % 3), j = F(f, (c + 2) % 3);
-          const double w = W(f, c) * trial[f];
-          for (const auto& [p, q] : {std::pair<int, int>{i, j}, std::pair<int, int>{j, i}}) {
-            if (idx[d][p] < 0) continue;
-            t.emplace_back(idx[d][p], idx[d][p], w);
-            if (idx[d][q] >= 0)
-              t.emplace_back(idx[d][p], idx[d][q], -w);
-            else if (systems == 1)
-              rhs.row(idx[d][p]) += w * UV.row(q);
-            else
-              rhs(idx[d][p], 0) += w * UV(q, d);
-          }
-        }
-      SparseMatrix L(m[d], m[d]);
-      L.setFromTriplets(t.begin(), t.end());
-      SpdSolver& solver = solvers[d];
-      ok = k == 0 ? solver.compute(L) : solver.refactor(L);
-      if (!ok) break;
-      const MatrixXd x = solver.solve(rhs);
-      for (Eigen::Index v = 0; v < nv; ++v)
-        if (idx[d][v] >= 0) {
-          if (systems == 1)
-            next.row(v) = x.row(idx[d][v]);
+  VectorXd scale = VectorXd::Ones(nf);  // w_k / w_0 = Π σ_j per face
+  SpdSolver solver;                     // the pattern is the same every iteration: one analysis
+  for (int k = 0; k < opt.max_iterations && m > 0; ++k) {
+    const double sa = area.sum();
+    VectorXd trial(nf);
+    for (Eigen::Index f = 0; f < nf; ++f)
+      trial[f] = scale[f] * std::pow(std::max(1e-300, (area[f] / sa) / (face_target[f] / st)), opt.exponent);
+    std::vector<Eigen::Triplet<double>> t;
+    t.reserve(static_cast<std::size_t>(12 * nf));
+    MatrixXd rhs = MatrixXd::Zero(m, 2);
+    for (Eigen::Index f = 0; f < nf; ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int i = F(f, (c + 1) % 3), j = F(f, (c + 2) % 3);
+        const double w = W(f, c) * trial[f];
+        // Row p of the Laplacian: +w on the diagonal, −w to q (a held q goes to the right side).
+        for (const auto& [p, q] : {std::pair<int, int>{i, j}, std::pair<int, int>{j, i}}) {
+          if (idx[p] < 0) continue;
+          t.emplace_back(idx[p], idx[p], w);
+          if (idx[q] >= 0)
+            t.emplace_back(idx[p], idx[q], -w);
           else
-            next(v, d) = x(idx[d][v], 0);
+            rhs.row(idx[p]) += w * UV.row(q);
         }
-    }
-    if (!ok) break;
-    // Positive weights and a fixed convex boundary guarantee an embedding (Floater 2003); with
-    // sliding sides, or round-off on extreme shapes, keep the last valid iterate.
-    const int nflip = count_flipped(next, F, min_area);
-    const double e = mean_log_stretch(signed_face_areas_2d(next, F), face_target);
-    if (nflip > 0 || !(e < err)) break;
+      }
+    SparseMatrix L(m, m);
+    L.setFromTriplets(t.begin(), t.end());
+    if (!(k == 0 ? solver.compute(L) : solver.refactor(L))) break;
+    const MatrixXd X = solver.solve(rhs);
+    MatrixXd next = UV;
+    for (Eigen::Index v = 0; v < nv; ++v)
+      if (idx[v] >= 0) next.row(v) = X.row(idx[v]);
+    // Positive weights and a held convex boundary guarantee an embedding (Floater 2003); keep the
+    // last valid iterate if round-off folds a triangle of extreme shape.
+    const VectorXd next_area = signed_face_areas_2d(next, F);
+    const double e = mean_log_stretch(next_area, face_target);
+    if ((next_area.array() <= min_area).any() || !(e < err)) break;
     UV = std::move(next);
+    area = next_area;
     scale = trial;
     const bool slow = e > opt.stop_improvement * err;
     err = e;
