@@ -58,7 +58,7 @@ struct FlowOptions {
 
   // Mesh method (and polish).
   int max_iterations = 200;      // mesh steps (Mesh method); polish uses polish_iterations
-  int polish_iterations = 4;
+  int polish_iterations = 8;
   double polish_band = 0.015;    // polish corrects per-vertex |ln ratio| beyond this band
   int polish_rings = 3;          // vertices within this many rings of an out-of-band vertex move
   double theta = 0.5;            // fraction of the critical flip-preventing step (DLF eq. 5)
@@ -119,6 +119,28 @@ double critical_step(const Eigen::Vector2d p[3], const Eigen::Vector2d d[3]);
 // vertices nearby"). Returns the number of vertices moved; *remaining = flips left.
 int repair_flips(const MatrixXd& V, const MatrixXi& F, const VectorXi& side_mask, double width, MatrixXd& UV,
                  int* remaining = nullptr);
+
+// Untangling by neighbour means in the map itself: the vertices of triangles whose signed area is
+// not above min_area (#F) move to the mean of their neighbours' current positions (side vertices
+// along their side only, corners fixed; Gauss-Seidel in index order), the region widened by a
+// ring every 10 rounds, for up to max_rounds rounds. A small patch's fixed ring is rarely convex,
+// so a harmonic re-solve of the patch (repair_flips) can fold triangles of its own; the local mean
+// stays inside a nearly convex one-ring. Returns the vertices moved; *remaining = triangles left.
+int untangle_flips(const MatrixXi& F, const VectorXi& side_mask, double width, const VectorXd& min_area, MatrixXd& UV,
+                   int* remaining = nullptr, int max_rounds = 40);
+
+// Per face, the signed area (in the map's units) below which its orientation may not survive
+// storing the map in single precision (GIFTI coordinates are float32): 4 ε_float max(W, 1) x its
+// longest edge. A triangle of the surface that is almost degenerate has an almost degenerate
+// authalic image; at this floor it is kept open enough to be read back unflipped.
+VectorXd single_precision_area_floor(const MatrixXd& UV, const MatrixXi& F, double width);
+
+// Opens the triangles whose signed area is not above min_area (#F) by the smallest move: the
+// vertex opposite the longest edge is pushed off it, perpendicular, to twice the floor (a side
+// vertex along its side only; corners stay), for up to max_rounds rounds. For the images of almost
+// degenerate surface triangles, which the flow leaves almost degenerate. Returns the triangles left.
+int open_thin_triangles(const MatrixXi& F, const VectorXi& side_mask, double width, const VectorXd& min_area, MatrixXd& UV,
+                        int max_rounds = 10);
 
 // Delaunay edge flips (planar, interior edges) until every interior edge is locally Delaunay or
 // max_flips is reached; F is changed in place. Returns the number of flips.

@@ -162,3 +162,39 @@ TEST(FlattenCli, RefusesARegionBeyondTheValidatedSizeUpFront) {
   EXPECT_NE(output.find("--max-vertices"), std::string::npos) << output;
   EXPECT_TRUE(fs::is_empty(dir + "/out"));
 }
+
+// The real-mesh failure mode: a native-resolution FreeSurfer white surface (164,000 vertices)
+// with its uncut cortex label. The map must pass its acceptance (exit 0) with the issue's
+// numbers, and the independent evaluator must agree.
+TEST(FlattenCli, NativeResolutionWhiteSurfaceWithItsCortexLabelIsAuthalic) {
+  AUTHALIC_REQUIRE_SHARED(white, "fs741/lh.white.surf.gii");
+  AUTHALIC_REQUIRE_SHARED(label, "fs741/lh.cortex.label");
+  const std::string dir = authalic::test::temp_dir("flatten_fs741");
+  const std::string uv = dir + "/uv.surf.gii", m = dir + "/m.json";
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " flatten " + white + " " + dir + "/flat.surf.gii --label " + label + " --uv " + uv +
+                            " --metrics " + m + " -q",
+                        &output),
+            0)
+      << output;
+  const auto j = read_json(m);
+  EXPECT_EQ(j.at("acceptance").at("passed"), true);
+  EXPECT_EQ(j.at("flips"), 0);
+  EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.005);
+  EXPECT_LE(j.at("metrics").at("vertex_ln_area_abs").at("mean").get<double>(), 0.01);
+  EXPECT_LE(j.at("metrics").at("face_ln_area_abs").at("mean").get<double>(), 0.05);
+  // The conformal start squeezes this cortex far beyond what the grid alone resolves.
+  EXPECT_GT(j.at("initial_metrics").at("element_cv").get<double>(), 0.5);
+  const std::string evalmap = authalic::test::shared_data("../tools/evalmap.py");
+  if (evalmap.empty() || run_command("/usr/bin/python3 -c 'import nibabel, numpy'") != 0) {
+    if (authalic::test::running_in_ci()) FAIL() << "evalmap.py or python3-nibabel missing under CI=true";
+    GTEST_SKIP() << "evalmap.py or python3-nibabel not available";
+  }
+  ASSERT_EQ(run_command("/usr/bin/python3 " + evalmap + " " + white + " " + uv + " --domain square --k 32 --inserted auto --json > " +
+                            dir + "/e.json"),
+            0);
+  const auto e = read_json(dir + "/e.json");
+  EXPECT_EQ(e.at("flips"), 0);
+  EXPECT_NEAR(e.at("element_area_cv_k32").get<double>(), j.at("metrics").at("element_cv").get<double>(), 2e-4);
+  EXPECT_NEAR(e.at("ln_area_ratio_abs_mean").get<double>(), j.at("metrics").at("face_ln_area_abs").at("mean").get<double>(), 2e-3);
+}

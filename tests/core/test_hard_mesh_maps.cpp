@@ -414,3 +414,23 @@ TEST(HardMeshMaps, NearlyClosedRegionCompressedByTheConformalMapComesOutAuthalic
   EXPECT_GT(r.stretch.iterations, 0);
   EXPECT_LT(r.stretch.final_log_stretch, 0.5 * r.stretch.initial_log_stretch);
 }
+
+// The acceptance rule itself, with known numbers: each limit fails on its own, the coarse-mesh
+// allowance follows the number of faces per element and not the map's own noise.
+TEST(HardMeshMaps, AcceptanceRuleNamesEachFailedLimit) {
+  MapMetrics m;
+  m.faces = 300000;
+  m.element_cols = m.element_rows = 32;
+  m.element_cv = 0.004;
+  m.face_ln_area_sd = 5.0;  // a broken map's noise must not loosen its own limit
+  EXPECT_EQ(authalic_acceptance_problem(m, 0.005, true), "");
+  m.flips = 3;
+  EXPECT_NE(authalic_acceptance_problem(m, 0.005, true).find("3 flipped triangles"), std::string::npos);
+  m.flips = 0;
+  m.element_cv = 0.02;  // 293 faces per element: the limit is 0.01 + nothing
+  EXPECT_NE(authalic_acceptance_problem(m, 0.005, true).find("element CV 0.02"), std::string::npos);
+  EXPECT_EQ(authalic_acceptance_problem(m, 0.005, false), "");  // measure control: CV not checked
+  EXPECT_NE(authalic_acceptance_problem(m, 0.02, false).find("per-vertex mean |ln area ratio| 0.02"), std::string::npos);
+  m.faces = 2048;  // 2 faces per element: 3 x 0.1 / sqrt(2) = 0.21 allowed
+  EXPECT_EQ(authalic_acceptance_problem(m, 0.005, true), "");
+}

@@ -201,3 +201,29 @@ TEST(RectangleMap, DeterministicForOneAndTwoThreads) {
   EXPECT_TRUE(b1.left.UV == b2.left.UV) << "max difference " << (b1.left.UV - b2.left.UV).cwiseAbs().maxCoeff();
   EXPECT_TRUE(b1.right.UV == b2.right.UV) << "max difference " << (b1.right.UV - b2.right.UV).cwiseAbs().maxCoeff();
 }
+
+// The two-hemisphere rectangle from two square maps: an affine stretch, so every face's area
+// ratio changes by the same factor (the part's width) and the parts meet at w_L = 2 A_L / (A_L + A_R).
+TEST(RectangleMap, RectangleFromSquareMapsIsTheirAffineStretch) {
+  const TriMesh left = test::folded_patch(14);
+  TriMesh right = left;
+  right.V *= 1.2;  // unequal areas: the seam is not at x = 1
+  right.V.col(0) = -right.V.col(0);
+  right.F.col(1).swap(right.F.col(2));
+  const SquareMapResult l = square_map(left.V, left.F, {}), r = square_map(right.V, right.F, {});
+  const HemisphereRectangles h = hemisphere_rectangles_from_squares(l, r);
+  EXPECT_NEAR(h.split, 2.0 / 2.44, 1e-9);
+  const VectorXd sq = signed_face_areas_2d(l.UV, l.F), part = signed_face_areas_2d(h.left.UV, h.left.F);
+  EXPECT_LT((part - h.split * sq).cwiseAbs().maxCoeff(), 1e-12);
+  const VectorXd sq_r = signed_face_areas_2d(r.UV, r.F), part_r = signed_face_areas_2d(h.right.UV, h.right.F);
+  EXPECT_LT((part_r - (2.0 - h.split) * sq_r).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_NEAR(h.right.UV.col(0).minCoeff(), h.split, 1e-12);
+  EXPECT_NEAR(h.right.UV.col(0).maxCoeff(), 2.0, 1e-12);
+  // Authalic over the whole rectangle: the element CV of both parts together is the squares'.
+  MatrixXd V(l.V.rows() + r.V.rows(), 3), UV(l.V.rows() + r.V.rows(), 2);
+  V << h.left.V, h.right.V;
+  UV << h.left.UV, h.right.UV;
+  MatrixXi F(l.F.rows() + r.F.rows(), 3);
+  F << h.left.F, (h.right.F.array() + static_cast<int>(l.V.rows())).matrix();
+  EXPECT_LE(map_metrics(V, UV, F, MapDomain::Rectangle, 8).element_cv, 0.02);
+}
