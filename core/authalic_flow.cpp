@@ -523,13 +523,7 @@ int untangle_flips(const MatrixXi& F, const VectorXi& side_mask, double width, c
         for (int k = 0; k < 3; ++k) mark[F(f, k)] = 1;
       }
     if (left == 0 || round == max_rounds) break;
-    for (int ring = 0; ring < round / 10; ++ring) {
-      std::vector<char> grown = mark;
-      for (Eigen::Index v = 0; v < nv; ++v)
-        if (mark[v])
-          for (int u : adj[v]) grown[u] = 1;
-      mark.swap(grown);
-    }
+    grow_by_rings(mark, adj, round / 10);
     for (int sweep = 0; sweep < 5; ++sweep)
       for (Eigen::Index v = 0; v < nv; ++v) {
         const int m = side_mask.size() ? side_mask[v] : 0;

@@ -64,6 +64,9 @@ VectorXi halfedge_twins(const MatrixXi& F, int num_vertices);
 std::vector<std::vector<int>> boundary_loops(const MatrixXi& F, int num_vertices);
 // One-ring of every vertex: its neighbours through an edge of F, sorted and unique.
 std::vector<std::vector<int>> vertex_neighbours(const MatrixXi& F, Eigen::Index num_vertices);
+// Grows a vertex set (mark: #V, non-zero = in the set) by `rings` rings of neighbours (adj from
+// vertex_neighbours), in place.
+void grow_by_rings(std::vector<char>& mark, const std::vector<std::vector<int>>& adj, int rings);
 
 // Connected components over faces (sharing an edge or a vertex counts as connected): per-face
 // component id, ids 0..n-1 in order of first face.

@@ -190,13 +190,7 @@ int repair_sphere_flips(MatrixXd& S, const MatrixXi& F, int max_rounds) {
     }
     if (!any) break;
     // widen the region every 10 rounds when a small one does not untangle
-    for (int ring = 0; ring < round / 10; ++ring) {
-      std::vector<char> grown = mark;
-      for (Eigen::Index v = 0; v < nv; ++v)
-        if (mark[v])
-          for (int u : adj[v]) grown[u] = 1;
-      mark.swap(grown);
-    }
+    grow_by_rings(mark, adj, round / 10);
     // Gauss-Seidel in index order (deterministic): each marked vertex to its neighbours' mean.
     for (int sweep = 0; sweep < 5; ++sweep)
       for (Eigen::Index v = 0; v < nv; ++v) {

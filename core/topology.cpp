@@ -355,4 +355,14 @@ std::string TopologyReport::summary() const {
   return s.str();
 }
 
+void grow_by_rings(std::vector<char>& mark, const std::vector<std::vector<int>>& adj, int rings) {
+  for (int ring = 0; ring < rings; ++ring) {
+    std::vector<char> grown = mark;
+    for (std::size_t v = 0; v < mark.size(); ++v)
+      if (mark[v])
+        for (int u : adj[v]) grown[u] = 1;
+    mark.swap(grown);
+  }
+}
+
 }  // namespace authalic
