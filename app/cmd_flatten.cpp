@@ -196,7 +196,11 @@ void run(const FlattenArgs& a) {
   // failure (exit 3), never a success with a note.
   const MapMetrics final_metrics = map_metrics(r.V, r.UV, r.F, MapDomain::Square, a.k);
   const MapMetrics accept_metrics = a.k == 32 ? final_metrics : map_metrics(r.V, r.UV, r.F, MapDomain::Square, 32);
-  const std::string problem = authalic_acceptance_problem(accept_metrics, r.flow.final_vertex_mean, options.density.size() == 0);
+  // The per-vertex limit is checked on the number the user is shown (the metrics); with a
+  // density the target is not the surface area, so the flow's density-weighted one is used.
+  const bool plain = options.density.size() == 0;
+  const std::string problem = authalic_acceptance_problem(
+      accept_metrics, plain ? accept_metrics.vertex_ln_area.mean : r.flow.final_vertex_mean, plain);
   const std::string failure = a.surface + " (" + region_source + "): the map is not authalic: " + problem;
   if (!problem.empty() && !a.keep_failed)
     throw ProcessingError(failure + "; nothing was written. Try more passes (--passes 6) or a finer grid (--grid 1024); "

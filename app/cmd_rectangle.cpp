@@ -34,6 +34,7 @@ struct RectangleArgs {
   bool cut_surface = false;
   std::string initial = "auto";
   int k = 32;
+  bool keep_failed = false;
 };
 
 std::string stem_of(const std::string& path) {
@@ -103,28 +104,52 @@ nlohmann::json part_json(const RectanglePart& p) {
             {"flips", p.flow.flips}}}};
 }
 
-// Writes metrics, pictures and the requested extra surfaces for one or two parts.
-void finish(const RectangleArgs& a, const std::vector<const RectanglePart*>& parts, const std::vector<VectorXd>& shading,
-            nlohmann::json j, double seconds) {
-  // All parts as one mesh in the rectangle.
+// All parts as one mesh in the rectangle: surface V, map UV, initial map UV0, faces F.
+struct Combined {
+  MatrixXd V, UV, UV0;
+  MatrixXi F;
+};
+
+Combined combine(const std::vector<const RectanglePart*>& parts) {
   Eigen::Index nv = 0, nf = 0;
   for (const auto* p : parts) nv += p->V.rows(), nf += p->F.rows();
-  MatrixXd V(nv, 3), UV(nv, 2), UV0(nv, 2);
-  MatrixXi F(nf, 3);
-  VectorXd values(nv);
+  Combined c{MatrixXd(nv, 3), MatrixXd(nv, 2), MatrixXd(nv, 2), MatrixXi(nf, 3)};
   Eigen::Index ov = 0, of = 0;
-  for (std::size_t i = 0; i < parts.size(); ++i) {
-    const RectanglePart& p = *parts[i];
-    V.middleRows(ov, p.V.rows()) = p.V;
-    UV.middleRows(ov, p.V.rows()) = p.UV;
-    UV0.middleRows(ov, p.V.rows()) = p.UV_initial;
-    F.middleRows(of, p.F.rows()) = p.F.array() + static_cast<int>(ov);
-    values.segment(ov, p.V.rows()) = part_values(p, shading[i]);
-    ov += p.V.rows();
-    of += p.F.rows();
+  for (const auto* p : parts) {
+    c.V.middleRows(ov, p->V.rows()) = p->V;
+    c.UV.middleRows(ov, p->V.rows()) = p->UV;
+    c.UV0.middleRows(ov, p->V.rows()) = p->UV_initial;
+    c.F.middleRows(of, p->F.rows()) = p->F.array() + static_cast<int>(ov);
+    ov += p->V.rows();
+    of += p->F.rows();
   }
+  return c;
+}
+
+// Acceptance (core/metrics.h) before anything is written: a rectangle that is not authalic is a
+// failure (exit 3, nothing written), unless --keep-failed. Returns the problem ("" = passed).
+std::string check_acceptance(const RectangleArgs& a, const std::vector<const RectanglePart*>& parts, const std::string& what) {
+  const Combined c = combine(parts);
+  const MapMetrics m = map_metrics(c.V, c.UV, c.F, MapDomain::Rectangle, 32);
+  const std::string problem = authalic_acceptance_problem(m, m.vertex_ln_area.mean, true);
+  if (!problem.empty() && !a.keep_failed)
+    throw ProcessingError(what + ": the rectangle map is not authalic: " + problem +
+                          "; nothing was written. --keep-failed writes the map for inspection, marked as failed");
+  return problem;
+}
+
+// Writes metrics, pictures and the requested extra surfaces for one or two parts.
+void finish(const RectangleArgs& a, const std::vector<const RectanglePart*>& parts, const std::vector<VectorXd>& shading,
+            nlohmann::json j, double seconds, const std::string& what, const std::string& problem) {
+  const Combined all = combine(parts);
+  const MatrixXd &V = all.V, &UV = all.UV, &UV0 = all.UV0;
+  const MatrixXi& F = all.F;
+  VectorXd values(V.rows());
+  for (std::size_t i = 0, ov = 0; i < parts.size(); ov += parts[i]->V.rows(), ++i)
+    values.segment(static_cast<Eigen::Index>(ov), parts[i]->V.rows()) = part_values(*parts[i], shading[i]);
   const MapMetrics m = map_metrics(V, UV, F, MapDomain::Rectangle, a.k);
   j["metrics"] = metrics_json(m);
+  j["acceptance"] = {{"passed", problem.empty()}, {"problem", problem}};
   j["extent"] = {UV.col(0).minCoeff(), UV.col(1).minCoeff(), UV.col(0).maxCoeff(), UV.col(1).maxCoeff()};
   j["seconds"] = seconds;
   if (!a.metrics.empty()) {
@@ -142,7 +167,7 @@ void finish(const RectangleArgs& a, const std::vector<const RectanglePart*>& par
     o.domain_width = 2.0;
     o.grid_cols = 2 * a.k;
     o.grid_rows = a.k;
-    o.title = "authalic rectangle";
+    o.title = problem.empty() ? "authalic rectangle" : "FAILED acceptance: rectangle map (kept for inspection)";
     io::write_png(a.png, analysis::render_flat(UV, F, c, o));
   }
   if (!a.histogram.empty()) {
@@ -155,22 +180,21 @@ void finish(const RectangleArgs& a, const std::vector<const RectanglePart*>& par
   std::ostringstream line;
   line << "rectangle: " << m.flips << " flipped faces, element CV " << m.element_cv << " (" << m.element_cols << "x"
        << m.element_rows << "), per-face mean |ln area ratio| " << m.face_ln_area.mean << ", " << seconds << " s";
+  if (!problem.empty())
+    throw ProcessingError(what + ": the rectangle map is not authalic: " + problem +
+                          "; written for inspection (--keep-failed), marked as failed");
   if (global_options().json) {
     std::cout << j.dump(2) << '\n';
   } else {
     info(line.str());
   }
-  if (m.flips > 0) {
-    std::cerr << "authalic: warning: " << m.flips << " faces of the rectangle map are flipped\n";
-    set_exit_code(3);
-  }
 }
 
-io::SurfaceWriteOptions flat_options(const std::string& structure, const std::string& what) {
+io::SurfaceWriteOptions flat_options(const std::string& structure, const std::string& what, const std::string& problem) {
   io::SurfaceWriteOptions wo;
   wo.geometric_type = "Flat";
   wo.anatomical_structure = structure;
-  wo.metadata = {{"authalic_map", what}};
+  wo.metadata = {{"authalic_map", what}, {"authalic_acceptance", problem.empty() ? "passed" : "FAILED: " + problem}};
   return wo;
 }
 
@@ -194,13 +218,14 @@ void run_one_surface(const RectangleArgs& a) {
     throw InputError(a.surface + ": " + e.what());
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string problem = check_acceptance(a, {&r.map}, a.surface);
   const std::string structure = s.metadata.count("AnatomicalStructurePrimary") ? s.metadata.at("AnatomicalStructurePrimary") : "";
-  io::write_surface(a.out, as_flat_mesh(r.map.UV, r.map.F), flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)"));
+  io::write_surface(a.out, as_flat_mesh(r.map.UV, r.map.F), flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)", problem));
   const std::string stem = stem_of(a.out);
   if (a.flat) {
     // 1 mm^2 of flat map = 1 mm^2 of cortex: the rectangle (area 2) scaled by sqrt(area / 2).
     io::write_surface(stem + ".flat.surf.gii", as_flat_mesh(r.map.UV, r.map.F, std::sqrt(r.map.area_mm2 / 2.0)),
-                      flat_options(structure, "rectangle scaled to the cortical area (mm)"));
+                      flat_options(structure, "rectangle scaled to the cortical area (mm)", problem));
   }
   if (a.cut_surface) {
     io::SurfaceWriteOptions wo;
@@ -223,7 +248,7 @@ void run_one_surface(const RectangleArgs& a) {
                       {"initial_attempts", r.attempts},
                       {"sphere_flips", r.sphere_flips},
                       {"part", part_json(r.map)}};
-  finish(a, {&r.map}, {shading}, j, seconds);
+  finish(a, {&r.map}, {shading}, j, seconds, a.surface, problem);
 }
 
 void run_two_hemispheres(const RectangleArgs& a) {
@@ -238,13 +263,15 @@ void run_two_hemispheres(const RectangleArgs& a) {
     throw InputError(a.lh + ", " + a.rh + ": " + e.what());
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string what = a.lh + ", " + a.rh;
+  const std::string problem = check_acceptance(a, {&r.left, &r.right}, what);
   const std::string lpath = a.out + ".lh.surf.gii", rpath = a.out + ".rh.surf.gii";
-  io::write_surface(lpath, as_flat_mesh(r.left.UV, r.left.F), flat_options("CortexLeft", "rectangle [0,2]x[0,1], left part"));
-  io::write_surface(rpath, as_flat_mesh(r.right.UV, r.right.F), flat_options("CortexRight", "rectangle [0,2]x[0,1], right part"));
+  io::write_surface(lpath, as_flat_mesh(r.left.UV, r.left.F), flat_options("CortexLeft", "rectangle [0,2]x[0,1], left part", problem));
+  io::write_surface(rpath, as_flat_mesh(r.right.UV, r.right.F), flat_options("CortexRight", "rectangle [0,2]x[0,1], right part", problem));
   if (a.flat) {
     const double scale = std::sqrt((r.left.area_mm2 + r.right.area_mm2) / 2.0);
-    io::write_surface(a.out + ".lh.flat.surf.gii", as_flat_mesh(r.left.UV, r.left.F, scale), flat_options("CortexLeft", "rectangle scaled to the cortical area (mm)"));
-    io::write_surface(a.out + ".rh.flat.surf.gii", as_flat_mesh(r.right.UV, r.right.F, scale), flat_options("CortexRight", "rectangle scaled to the cortical area (mm)"));
+    io::write_surface(a.out + ".lh.flat.surf.gii", as_flat_mesh(r.left.UV, r.left.F, scale), flat_options("CortexLeft", "rectangle scaled to the cortical area (mm)", problem));
+    io::write_surface(a.out + ".rh.flat.surf.gii", as_flat_mesh(r.right.UV, r.right.F, scale), flat_options("CortexRight", "rectangle scaled to the cortical area (mm)", problem));
   }
   auto shading = [&](const io::Surface& s, const std::string& sulc) -> VectorXd {
     if (a.png.empty()) return VectorXd::Zero(s.mesh.num_vertices());
@@ -258,7 +285,7 @@ void run_two_hemispheres(const RectangleArgs& a) {
                       {"layout", "left hemisphere on [0, split], right (mirrored) on [split, 2]; anterior at the top middle of each part"},
                       {"left", part_json(r.left)},
                       {"right", part_json(r.right)}};
-  finish(a, {&r.left, &r.right}, {shading(ls, a.lh_sulc), shading(rs, a.rh_sulc)}, j, seconds);
+  finish(a, {&r.left, &r.right}, {shading(ls, a.lh_sulc), shading(rs, a.rh_sulc)}, j, seconds, what, problem);
 }
 
 void setup(CLI::App& parent) {
@@ -268,7 +295,8 @@ void setup(CLI::App& parent) {
       "Area-preserving map of the whole brain onto the 2:1 rectangle [0,2] x [0,1]: either one closed genus-0 surface cut "
       "open along an inferior-medial path (--surface), or two hemispheres side by side with widths proportional to their "
       "cortical areas (--lh/--rh). Outputs are in rectangle coordinates (x in [0,2], y in [0,1]); element grid 2K x K. "
-      "Exit code 3 (after writing) if flipped faces remain.");
+      "A map that fails its acceptance (0 flipped faces, element CV <= 0.01 at 64x32, per-vertex mean |ln area ratio| "
+      "<= 0.01) is an error: exit code 3, nothing written.");
   sub->add_option("OUT", a->out,
                   "--surface: output map (GIFTI .surf.gii). --lh/--rh: output prefix, writes OUT.lh.surf.gii and OUT.rh.surf.gii")
       ->required();
@@ -283,6 +311,9 @@ void setup(CLI::App& parent) {
   rh->needs(lh);
   surface->excludes(lh)->excludes(rh);
   sub->add_option("--metrics", a->metrics, "Write distortion metrics (JSON; areas in mm^2)");
+  sub->add_flag("--keep-failed", a->keep_failed,
+                "Expert: write the outputs even when the map fails its acceptance, marked FAILED in their metadata and "
+                "picture title; the exit code is still 3");
   sub->add_option("--png", a->png, "Write a PNG of the map shaded by sulcal depth, with the 2K x K element grid");
   sub->add_option("--histogram", a->histogram, "Write a PNG histogram of the area and angle distortion per face");
   sub->add_option("--sulc", a->sulc, "Per-vertex sulcal depth of --surface for the PNG (default: depth below a smoothed copy, mm)")->needs(surface);

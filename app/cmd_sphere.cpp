@@ -35,6 +35,7 @@ struct SphereArgs {
   int puncture = -1;
   int grid = 0;
   int passes = 4;
+  bool keep_failed = false;
   double max_memory = -1;  // GB; < 0: 75% of the physical RAM
 };
 
@@ -60,6 +61,15 @@ void run(const SphereArgs& a) {
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
+  // Acceptance (core/metrics.h) before anything is written: a sphere that is not authalic is a
+  // failure (exit 3), never a success with a note.
+  const MapMetrics final_metrics = map_metrics(mesh.V, r.sphere, mesh.F, MapDomain::Sphere, 32);
+  const std::string problem = authalic_acceptance_problem(final_metrics, final_metrics.vertex_ln_area.mean, true);
+  const std::string failure = a.surface + ": the sphere map is not authalic: " + problem;
+  if (!problem.empty() && !a.keep_failed)
+    throw ProcessingError(failure + "; nothing was written. Try more passes (--passes 8) or a finer background grid "
+                          "(--grid 128); --keep-failed writes the map for inspection, marked as failed");
+
   const double area = face_areas(mesh.V, mesh.F).sum();
   const double radius = a.area_radius ? std::sqrt(area / (4.0 * M_PI)) : a.radius;
   const bool left = is_left_hemisphere(surface.metadata, mesh.V);
@@ -70,7 +80,8 @@ void run(const SphereArgs& a) {
   wo.metadata = {{"authalic_map", "sphere"},
                  {"authalic_radius_mm", std::to_string(radius)},
                  {"authalic_orientation", kOrientationRule},
-                 {"authalic_source", a.surface}};
+                 {"authalic_source", a.surface},
+                 {"authalic_acceptance", problem.empty() ? "passed" : "FAILED: " + problem}};
   TriMesh out{r.sphere * radius, mesh.F};
   io::write_surface(a.out, out, wo);
   if (!a.conformal.empty()) {
@@ -78,10 +89,6 @@ void run(const SphereArgs& a) {
     io::write_surface(a.conformal, TriMesh{r.conformal * radius, mesh.F}, wo);
   }
 
-  // The final metrics feed the JSON and the summary line; a quiet run without --metrics skips them
-  // (they cost ~5% of the run on a 160k-vertex surface).
-  const bool want_metrics = !a.metrics.empty() || global_options().json || !global_options().quiet;
-  const MapMetrics final_metrics = want_metrics ? map_metrics(mesh.V, r.sphere, mesh.F, MapDomain::Sphere, 32) : MapMetrics{};
   nlohmann::json j = {{"surface", a.surface},
                       {"output", a.out},
                       {"vertices", mesh.num_vertices()},
@@ -98,6 +105,13 @@ void run(const SphereArgs& a) {
                       {"flips", r.flips},
                       {"metrics", metrics_json(final_metrics)},
                       {"seconds", {{"conformal", r.seconds_conformal}, {"flow", r.seconds_flow}, {"total", seconds}}}};
+  const AuthalicAcceptance limits;
+  j["acceptance"] = {{"passed", problem.empty()},
+                     {"problem", problem},
+                     {"limits",
+                      {{"flips", 0},
+                       {"element_cv_64x32", limits.max_element_cv},
+                       {"vertex_ln_area_abs_mean", limits.max_vertex_ln_area}}}};
   {
     nlohmann::json rot = nlohmann::json::array();
     for (int i = 0; i < 3; ++i) rot.push_back({r.rotation(i, 0), r.rotation(i, 1), r.rotation(i, 2)});
@@ -125,7 +139,7 @@ void run(const SphereArgs& a) {
     std::tie(c.vmin, c.vmax) = analysis::robust_range(c.values);
     analysis::SurfaceRenderOptions so;
     so.left_hemisphere = left;
-    so.title = "authalic sphere";
+    so.title = problem.empty() ? "authalic sphere" : "FAILED acceptance: sphere map (kept for inspection)";
     io::write_png(a.png, analysis::render_surface_views(out.V, out.F, c, {analysis::View::Lateral, analysis::View::Medial}, so));
   }
 
@@ -133,14 +147,11 @@ void run(const SphereArgs& a) {
   line << "sphere: " << a.out << " (radius " << radius << " mm): " << r.flips << " flipped faces, element CV "
        << final_metrics.element_cv << " (" << final_metrics.element_cols << "x" << final_metrics.element_rows
        << "), per-face mean |ln area ratio| " << final_metrics.face_ln_area.mean << ", " << seconds << " s";
+  if (!problem.empty()) throw ProcessingError(failure + "; written for inspection (--keep-failed), marked as failed");
   if (global_options().json) {
     std::cout << j.dump(2) << '\n';
   } else {
     info(line.str());
-  }
-  if (r.flips > 0) {
-    std::cerr << "authalic: warning: " << r.flips << " faces of the sphere map are still flipped after repair\n";
-    set_exit_code(3);
   }
 }
 
@@ -150,7 +161,8 @@ void setup(CLI::App& parent) {
       "sphere",
       "Area-preserving map of a closed genus-0 surface (a hemisphere or a whole brain) onto a sphere: Haker's conformal "
       "map, Moebius centring, then Moser's area-restoring flow. Orientation: +x right, +y anterior, +z superior. "
-      "Exit code 3 (after writing) if flipped faces remain.");
+      "A map that fails its acceptance (0 flipped faces, element CV <= 0.01 at 64x32, per-vertex mean |ln area ratio| "
+      "<= 0.01) is an error: exit code 3, nothing written.");
   sub->add_option("SURFACE", a->surface, "Closed genus-0 surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, STL), mm")->required();
   sub->add_option("OUT", a->out, "Output sphere surface (GIFTI .surf.gii), same vertices and triangles as SURFACE")->required();
   sub->add_option("--metrics", a->metrics, "Write distortion metrics (JSON; areas in mm^2, element grid 64 x 32)");
@@ -166,6 +178,9 @@ void setup(CLI::App& parent) {
   sub->add_option("--grid", a->grid, "Background cube-sphere cells per cube edge (default: from the mesh size)")
       ->check(CLI::Range(8, 512));
   sub->add_option("--passes", a->passes, "Moser flow passes")->check(CLI::Range(0, 50))->capture_default_str();
+  sub->add_flag("--keep-failed", a->keep_failed,
+                "Expert: write the outputs even when the map fails its acceptance, marked FAILED in their metadata and "
+                "picture title; the exit code is still 3");
   add_max_memory_option(*sub, &a->max_memory);
   add_common_options(*sub);
   sub->callback([a]() { run(*a); });

@@ -51,6 +51,7 @@ std::string to_string(HarmonicWeights w) {
     case HarmonicWeights::Cotangent: return "cotangent";
     case HarmonicWeights::MeanValue: return "mean-value";
     case HarmonicWeights::Uniform: return "uniform";
+    case HarmonicWeights::ClampedCotangent: return "clamped cotangent";
   }
   return "unknown";
 }
@@ -105,7 +106,8 @@ MatrixXd solve_harmonic(const MatrixXd& V, const MatrixXi& F, const std::vector<
       const Eigen::Vector3d e1 = p[(c + 1) % 3] - p[c], e2 = p[(c + 2) % 3] - p[c];
       const double cr = e1.cross(e2).norm(), dt = e1.dot(e2);
       switch (weights) {
-        case HarmonicWeights::Cotangent: {
+        case HarmonicWeights::Cotangent:
+        case HarmonicWeights::ClampedCotangent: {
           // Angle at corner i is opposite edge (j, k): contributes cot/2 to w_jk = w_kj.
           const double cot = dt / std::max(cr, 1e-300);
           w.emplace_back(j, k, 0.5 * cot);
@@ -130,6 +132,13 @@ MatrixXd solve_harmonic(const MatrixXd& V, const MatrixXi& F, const std::vector<
       }
     }
   }
+  if (weights == HarmonicWeights::ClampedCotangent) {
+    // Per half-edge, as core/stretch_energy.cpp clamps them: every weight positive.
+    double mean_abs = 0;
+    for (const auto& t : w) mean_abs += std::abs(t.value());
+    const double floor = 1e-2 * mean_abs / std::max<std::size_t>(1, w.size());
+    for (auto& t : w) t = Eigen::Triplet<double>(t.row(), t.col(), std::max(t.value(), floor));
+  }
   SparseMatrix W(nv, nv);
   W.setFromTriplets(w.begin(), w.end());
 
@@ -152,7 +161,7 @@ MatrixXd solve_harmonic(const MatrixXd& V, const MatrixXi& F, const std::vector<
   SparseMatrix A(n, n);
   A.setFromTriplets(a.begin(), a.end());
   MatrixXd x;
-  if (weights == HarmonicWeights::Cotangent) {
+  if (weights == HarmonicWeights::Cotangent || weights == HarmonicWeights::ClampedCotangent) {
     // The cotangent matrix is the P1 stiffness matrix: positive definite with a Dirichlet
     // boundary whatever the triangle shapes, so a Cholesky factorisation applies.
     const SpdSolver solver(A);
@@ -473,8 +482,8 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
   }
   R.cotangent_flips = count_flipped(R.UV, R.F, min_area);
   if (R.cotangent_flips > 0) {
-    R.weights = HarmonicWeights::MeanValue;
-    R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::MeanValue);
+    R.weights = opt.fallback;
+    R.UV = harmonic_map(R.V, R.F, final_loop, buv, opt.fallback);
     if (count_flipped(R.UV, R.F, min_area) > 0) {
       R.weights = HarmonicWeights::Uniform;
       R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::Uniform);

@@ -81,6 +81,7 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   RectangleBoundaryMap b;
   b.width = opt.width;
   b.sliding_boundary = opt.sliding_initial_boundary;
+  if (opt.stretch_start) b.fallback = HarmonicWeights::ClampedCotangent;
   if (opt.anatomical_anchor) {
     double best = -std::numeric_limits<double>::infinity();
     for (Eigen::Index f = 0; f < F.rows(); ++f)
@@ -111,7 +112,7 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   MatrixXd start = init.UV;
   if (opt.stretch_start) {
     const VectorXd target = target_face_measure(init.V, init.F, fo.density, opt.width);
-    start = stretch_energy_map(init.V, init.F, target, init.UV, init.side_mask, opt.stretch, &R.stretch);
+    start = stretch_energy_map(init.V, init.F, target, init.UV, init.side_mask, opt.width, opt.stretch, &R.stretch);
     std::ostringstream msg;
     msg << "stretch-energy start: " << R.stretch.iterations << " iterations, mean |ln stretch| per face "
         << R.stretch.initial_log_stretch << " -> " << R.stretch.final_log_stretch;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/authalic_flow.h"
 #include "core/sparse_cholesky.h"
 
 namespace authalic {
@@ -29,7 +30,8 @@ double mean_log_stretch(const VectorXd& map_area, const VectorXd& target) {
 }  // namespace
 
 MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd& face_target, const MatrixXd& UV0,
-                            const VectorXi& side_mask, const StretchEnergyOptions& opt, StretchEnergyReport* report) {
+                            const VectorXi& side_mask, double width, const StretchEnergyOptions& opt,
+                            StretchEnergyReport* report) {
   const Eigen::Index nv = V.rows(), nf = F.rows();
   const MatrixXd W = surface_cot_weights(V, F, opt.min_weight);
   // Unknowns: the vertices used by F that are not on the boundary (side_mask 0).
@@ -37,9 +39,15 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
   for (Eigen::Index f = 0; f < nf; ++f)
     for (int c = 0; c < 3; ++c) used[F(f, c)] = 1;
   std::vector<int> idx(static_cast<std::size_t>(nv), -1);
+  VectorXi on_boundary = VectorXi::Zero(nv);
   int m = 0;
-  for (Eigen::Index v = 0; v < nv; ++v)
-    if (used[v] && !(side_mask.size() && side_mask[v])) idx[v] = m++;
+  for (Eigen::Index v = 0; v < nv; ++v) {
+    if (!used[v]) continue;
+    if (side_mask.size() && side_mask[v])
+      on_boundary[v] = 1;
+    else
+      idx[v] = m++;
+  }
 
   MatrixXd UV = UV0.leftCols(2);
   VectorXd area = signed_face_areas_2d(UV, F);
@@ -54,9 +62,10 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
     VectorXd trial(nf);
     for (Eigen::Index f = 0; f < nf; ++f)
       trial[f] = scale[f] * std::pow(std::max(1e-300, (area[f] / sa) / (face_target[f] / st)), opt.exponent);
-    std::vector<Eigen::Triplet<double>> t;
+    // The Laplacian of the unknowns (L) and its coupling to the held boundary (B): the interior
+    // solve is L X = B UV_boundary, so a moved boundary costs a solve, not a factorisation.
+    std::vector<Eigen::Triplet<double>> t, tb;
     t.reserve(static_cast<std::size_t>(12 * nf));
-    MatrixXd rhs = MatrixXd::Zero(m, 2);
     for (Eigen::Index f = 0; f < nf; ++f)
       for (int c = 0; c < 3; ++c) {
         const int i = F(f, (c + 1) % 3), j = F(f, (c + 2) % 3);
@@ -68,21 +77,40 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
           if (idx[q] >= 0)
             t.emplace_back(idx[p], idx[q], -w);
           else
-            rhs.row(idx[p]) += w * UV.row(q);
+            tb.emplace_back(idx[p], q, w);
         }
       }
-    SparseMatrix L(m, m);
+    SparseMatrix L(m, m), B(m, nv);
     L.setFromTriplets(t.begin(), t.end());
+    B.setFromTriplets(tb.begin(), tb.end());
     if (!(k == 0 ? solver.compute(L) : solver.refactor(L))) break;
-    const MatrixXd X = solver.solve(rhs);
-    MatrixXd next = UV;
-    for (Eigen::Index v = 0; v < nv; ++v)
-      if (idx[v] >= 0) next.row(v) = X.row(idx[v]);
-    // Positive weights and a held convex boundary guarantee an embedding (Floater 2003); keep the
-    // last valid iterate if round-off folds a triangle of extreme shape.
-    const VectorXd next_area = signed_face_areas_2d(next, F);
-    const double e = mean_log_stretch(next_area, face_target);
-    if ((next_area.array() <= min_area).any() || !(e < err)) break;
+
+    // Boundary: slid along its sides by one Moser pass of the current map (Neumann velocity, so
+    // corners stay), and only as far as the interior re-solve stays an embedding (halving).
+    MatrixXd slid = UV;
+    if (opt.moser_boundary)
+      slid = moser_grid_pass(face_target, UV, F, side_mask, width, opt.boundary_grid, 1.0, 20, 1.0, on_boundary);
+    bool accepted = false;
+    double e = err;
+    MatrixXd next;
+    VectorXd next_area;
+    for (double lambda = 1.0; lambda >= 0.1 && !accepted; lambda *= 0.5) {
+      next = UV;
+      if (opt.moser_boundary)
+        for (Eigen::Index v = 0; v < nv; ++v)
+          if (on_boundary[v]) next.row(v) = UV.row(v) + lambda * (slid.row(v) - UV.row(v));
+      const MatrixXd X = solver.solve(MatrixXd(B * next));
+      for (Eigen::Index v = 0; v < nv; ++v)
+        if (idx[v] >= 0) next.row(v) = X.row(idx[v]);
+      // Positive weights and a convex boundary guarantee an embedding (Floater 2003) while the
+      // boundary keeps its order; keep the last valid iterate if round-off or a slide past a
+      // neighbour folds a triangle.
+      next_area = signed_face_areas_2d(next, F);
+      e = mean_log_stretch(next_area, face_target);
+      accepted = !(next_area.array() <= min_area).any() && e < err;
+      if (!opt.moser_boundary) break;
+    }
+    if (!accepted) break;
     UV = std::move(next);
     area = next_area;
     scale = trial;

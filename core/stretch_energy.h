@@ -24,6 +24,9 @@ struct StretchEnergyOptions {
   double exponent = 1.0;        // each step multiplies the weights by σ^exponent
   double min_weight = 1e-2;     // floor of the cotangent weights, relative to their mean
   double stop_improvement = 0.8;  // stop when a step keeps more than this share of the error
+  // Slide the boundary along the sides by a Moser pass of each iterate (grid of this resolution).
+  bool moser_boundary = true;
+  int boundary_grid = 256;
 };
 
 struct StretchEnergyReport {
@@ -39,7 +42,7 @@ struct StretchEnergyReport {
 // their sides folds triangles after two steps on fs741's 96 % mask, so they stay.)
 // Output: #V x 2 map; the vertices not used by F and the fixed ones keep UV0.
 MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd& face_target, const MatrixXd& UV0,
-                            const VectorXi& side_mask, const StretchEnergyOptions& options = {},
+                            const VectorXi& side_mask, double width, const StretchEnergyOptions& options = {},
                             StretchEnergyReport* report = nullptr);
 
 }  // namespace authalic

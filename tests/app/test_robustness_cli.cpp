@@ -61,6 +61,37 @@ std::string run_args(const std::string& out) {
 
 // ---- flow budget -------------------------------------------------------------------------------
 
+TEST(RobustnessCli, SphereRefusesAMapThatIsNotAuthalic) {
+  const std::string dir = test::temp_dir("robust-sphere");
+  // An ellipsoid (2 : 1 : 1): its conformal map onto the sphere is far from authalic.
+  TriMesh e = test::icosphere(4);
+  e.V.col(0) *= 2.0;
+  const std::string surface = dir + "/ellipsoid.surf.gii";
+  io::write_surface(surface, e);
+  std::string out;
+  const std::string base = bin() + " sphere " + q(surface) + " " + q(dir + "/s.surf.gii") + " --passes 0 --metrics " +
+                           q(dir + "/m.json");
+  EXPECT_EQ(test::run_command(base, &out), 3) << out;
+  EXPECT_NE(out.find(surface + ": the sphere map is not authalic"), std::string::npos) << out;
+  EXPECT_NE(out.find("element CV"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/s.surf.gii"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/m.json"));
+  // --keep-failed writes it, marked as failed, and still exits 3.
+  EXPECT_EQ(test::run_command(base + " --keep-failed", &out), 3) << out;
+  ASSERT_TRUE(std::filesystem::exists(dir + "/s.surf.gii"));
+  std::ifstream in(dir + "/m.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["acceptance"]["passed"], false);
+  std::ifstream gii(dir + "/s.surf.gii");
+  const std::string text((std::istreambuf_iterator<char>(gii)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("FAILED: "), std::string::npos);
+  // With the flow the same surface passes.
+  ASSERT_EQ(test::run_command(bin() + " sphere " + q(surface) + " " + q(dir + "/s2.surf.gii") + " --metrics " + q(dir + "/m2.json"), &out), 0)
+      << out;
+  std::ifstream in2(dir + "/m2.json");
+  EXPECT_EQ(nlohmann::json::parse(in2)["acceptance"]["passed"], true);
+}
+
 TEST(RobustnessCli, FlattenRefusesAMapThatIsNotAuthalic) {
   const std::string dir = test::temp_dir("robust-flow");
   const std::string patch = write_patch(dir);
