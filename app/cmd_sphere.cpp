@@ -35,6 +35,7 @@ struct SphereArgs {
   int puncture = -1;
   int grid = 0;
   int passes = 4;
+  std::string route = "auto";
   bool keep_failed = false;
   double max_memory = -1;  // GB; < 0: 75% of the physical RAM
 };
@@ -53,6 +54,9 @@ void run(const SphereArgs& a) {
   options.flow_options.grid_cells = a.grid;
   options.flow_options.max_passes = a.passes;
   options.flow = a.passes > 0;
+  options.route = a.route == "square" ? SphereRoute::Square : a.route == "flow" ? SphereRoute::Flow : SphereRoute::Auto;
+  if (!a.conformal.empty() && options.route != SphereRoute::Flow)
+    throw InputError("--conformal: only the flow route has a conformal sphere; add --route flow to write one");
   SphereMapResult r;
   try {
     r = authalic_sphere_map(mesh, options, terminal_progress());
@@ -97,6 +101,8 @@ void run(const SphereArgs& a) {
                       {"radius_mm", radius},
                       {"hemisphere", left ? "left" : "right"},
                       {"orientation_rule", kOrientationRule},
+                      {"route", r.route == SphereRoute::Flow ? "flow" : "square"},
+                      {"route_fallback_reason", r.fallback_reason},
                       {"puncture_face", r.puncture_face},
                       {"puncture_attempts", r.puncture_attempts},
                       {"conformal_flips", r.conformal_flips},
@@ -120,14 +126,31 @@ void run(const SphereArgs& a) {
     for (const auto& p : r.flow.passes)
       passes.push_back({{"density_min", p.rho_min}, {"density_max", p.rho_max}, {"density_abs_ln_mean", p.rho_abs_log_mean},
                         {"rk4_steps", p.rk4_steps}, {"seconds", p.seconds}});
-    j["flow"] = {{"method", "Moser flow on a fixed cube-sphere background"},
-                 {"grid_cells_per_edge", r.flow.grid_cells},
-                 {"grid_vertices", r.flow.grid_vertices},
-                 {"iterations", r.flow.passes.size()},
-                 {"passes", passes}};
+    if (r.route == SphereRoute::Flow) {
+      j["flow"] = {{"method", "Moser flow on a fixed cube-sphere background"},
+                   {"grid_cells_per_edge", r.flow.grid_cells},
+                   {"grid_vertices", r.flow.grid_vertices},
+                   {"iterations", r.flow.passes.size()},
+                   {"passes", passes}};
+    } else {
+      const SphereFromSquareReport& q = r.square_route;
+      j["square_route"] = {{"cap_seed_vertex", q.seed_vertex},
+                           {"cap_faces", q.cap_faces},
+                           {"cap_area_fraction", q.cap_area_fraction},
+                           {"rest_faces", q.rest_faces},
+                           {"rest_square_flow", {{"iterations", q.square_flow.iterations},
+                                                 {"polish_iterations", q.square_flow.polish_iterations},
+                                                 {"vertex_ln_area_abs_mean", q.square_flow.final_vertex_mean}}},
+                           {"rest_stretch_energy_iterations", q.square_stretch.iterations},
+                           {"cap_stretch_energy", {{"iterations", q.cap.iterations},
+                                                   {"face_ln_stretch_abs_mean_before", q.cap.initial_log_stretch},
+                                                   {"face_ln_stretch_abs_mean_after", q.cap.final_log_stretch}}},
+                           {"sphere_polish_face_ln_area_abs_mean", q.polish_face_error}};
+    }
   }
   if (!a.metrics.empty()) {
-    j["conformal_metrics"] = metrics_json(map_metrics(mesh.V, r.conformal, mesh.F, MapDomain::Sphere, 32));
+    if (r.route == SphereRoute::Flow)
+      j["conformal_metrics"] = metrics_json(map_metrics(mesh.V, r.conformal, mesh.F, MapDomain::Sphere, 32));
     write_json_file(a.metrics, j);
   }
 
@@ -159,8 +182,10 @@ void setup(CLI::App& parent) {
   auto a = std::make_shared<SphereArgs>();
   CLI::App* sub = parent.add_subcommand(
       "sphere",
-      "Area-preserving map of a closed genus-0 surface (a hemisphere or a whole brain) onto a sphere: Haker's conformal "
-      "map, Moebius centring, then Moser's area-restoring flow. Orientation: +x right, +y anterior, +z superior. "
+      "Area-preserving map of a closed genus-0 surface (a hemisphere or a whole brain) onto a sphere: by default the "
+      "authalic square map of all but a 10 % cap, carried to the sphere by equal-area maps, then a per-face polish on "
+      "the sphere (--route flow: Haker's conformal map, Moebius centring, Moser's flow). Orientation: +x right, "
+      "+y anterior, +z superior. "
       "A map that fails its acceptance (0 flipped faces, element CV <= 0.01 at 64x32, per-vertex mean |ln area ratio| "
       "<= 0.01) is an error: exit code 3, nothing written.");
   sub->add_option("SURFACE", a->surface, "Closed genus-0 surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, STL), mm")->required();
@@ -178,6 +203,12 @@ void setup(CLI::App& parent) {
   sub->add_option("--grid", a->grid, "Background cube-sphere cells per cube edge (default: from the mesh size)")
       ->check(CLI::Range(8, 512));
   sub->add_option("--passes", a->passes, "Moser flow passes")->check(CLI::Range(0, 50))->capture_default_str();
+  sub->add_option("--route", a->route,
+                  "square: through the authalic square map of all but a cap of 10 % of the area, then per-face polish on "
+                  "the sphere (works on native-resolution meshes); flow: Haker's conformal sphere + Moser flow on the "
+                  "sphere; auto: square, and flow if the square route's sphere does not cover it once (docs/maps.md)")
+      ->check(CLI::IsMember({"auto", "flow", "square"}))
+      ->capture_default_str();
   sub->add_flag("--keep-failed", a->keep_failed,
                 "Expert: write the outputs even when the map fails its acceptance, marked FAILED in their metadata and "
                 "picture title; the exit code is still 3");

@@ -4,7 +4,8 @@
 #   bench/bench_real.sh [BUILD_DIR]     (default: build; needs ../shared/data)
 # Inputs: R1 = lh.cortex.label (90 % of the white area, one boundary loop: the medial wall's
 # border), R2 = lh.cortex96_mask.shape.gii (96 %: almost a closed sphere); each on lh.white and
-# lh.pial. Every map is measured by `authalic metrics` (inside flatten) and independently by
+# lh.pial; and the sphere of the closed lh.white and lh.pial. Every map is measured by
+# `authalic metrics` (inside flatten / sphere) and independently by
 # ../shared/tools/evalmap.py --inserted auto. A map that fails its acceptance exits 3 and is
 # written with --keep-failed, so its numbers are printed too. Prints one row per input and the
 # requirements with PASS/FAIL.
@@ -32,6 +33,16 @@ run() {
 for s in white pial; do
   run "R1-$s" "$data/lh.$s.surf.gii" "$data/lh.cortex.label"
   run "R2-$s" "$data/lh.$s.surf.gii" "$data/lh.cortex96_mask.shape.gii"
+done
+# The sphere (default route) of the closed white and pial surfaces, measured by evalmap --domain sphere.
+for s in white pial; do
+  set +e
+  /usr/bin/time -v "$bin" sphere "$data/lh.$s.surf.gii" "$work/S-$s.sphere.surf.gii" --metrics "$work/S-$s.json" --keep-failed -q \
+    2>"$work/S-$s.time"
+  echo $? >"$work/S-$s.code"
+  set -e
+  $py "$evalmap" "$data/lh.$s.surf.gii" "$work/S-$s.sphere.surf.gii" --domain sphere --json >"$work/S-$s.eval.json" 2>/dev/null ||
+    echo '{}' >"$work/S-$s.eval.json"
 done
 for n in R1-white R1-pial R2-white R2-pial; do
   surf="$data/lh.${n#*-}.surf.gii"
@@ -98,6 +109,22 @@ for n in ["R1-white", "R1-pial", "R2-white", "R2-pial"]:
     reqs += [(f"{n} exit code", code, 0), (f"{n} flips", flips if flips != "-" else 1e9, 0),
              (f"{n} element CV", cv, 0.005), (f"{n} per-vertex mean", vm, 0.01), (f"{n} per-face mean", face, 0.05),
              (f"{n} wall s", wall, 15.0), (f"{n} peak MB", rss, 1536)]
+print("\n| sphere | exit | wall s | RSS MB | route | flips | element CV 64x32 | per-face mean | per-vertex mean | evalmap flips | evalmap CV | evalmap face mean |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+for s in ["white", "pial"]:
+    n = "S-" + s
+    code = int(open(os.path.join(work, n + ".code")).read())
+    wall, cpu, rss = timing(n)
+    p = os.path.join(work, n + ".json")
+    j = json.load(open(p)) if os.path.exists(p) else {}
+    e = json.load(open(os.path.join(work, n + ".eval.json")))
+    m = j.get("metrics", {})
+    cv, face, vm = m.get("element_cv", float("nan")), ev(m, "face_ln_area_abs", "mean"), ev(m, "vertex_ln_area_abs", "mean")
+    flips = m.get("flips", 1e9)
+    print(f"| {s} | {code} | {wall:.2f} | {rss:.0f} | {j.get('route', '-')} | {flips} | {cv:.5f} | {face:.4f} | {vm:.4f} | "
+          f"{e.get('flips', 'nan')} | {e.get('element_area_cv', float('nan')):.5f} | {e.get('ln_area_ratio_abs_mean', float('nan')):.4f} |")
+    reqs += [(f"sphere {s} exit code", code, 0), (f"sphere {s} flips", flips, 0), (f"sphere {s} evalmap flips", e.get("flips", 1e9), 0),
+             (f"sphere {s} element CV", cv, 0.005), (f"sphere {s} per-face mean", face, 0.05), (f"sphere {s} wall s", wall, 15.0)]
 code = int(open(os.path.join(work, "run.code")).read())
 wall, cpu, rss = timing("run")
 log = os.path.join(work, "run", "sub-fs741", "log.txt")

@@ -1,6 +1,8 @@
 // Moser's area-restoring flow on the sphere over a fixed cube-sphere background (see sphere_flow.h).
 #include "core/sphere_flow.h"
 
+#include <Eigen/IterativeLinearSolvers>
+
 #include <Eigen/CholmodSupport>
 
 #include <algorithm>
@@ -193,6 +195,128 @@ int sphere_flipped_faces(const MatrixXd& S, const MatrixXi& F) {
     if ((b - a).cross(c - a).dot(a + b + c) <= 0) ++flips;
   }
   return flips;
+}
+
+namespace {
+
+// Area-weighted mean |ln(A_f / T_f)| with T scaled to the chord areas' total; folded faces count 10.
+double sphere_face_error(const MatrixXd& S, const MatrixXi& F, const VectorXd& measure, VectorXd* areas = nullptr) {
+  VectorXd a(F.rows());
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Vec3 p = S.row(F(f, 0)).transpose(), q = S.row(F(f, 1)).transpose(), r = S.row(F(f, 2)).transpose();
+    const Vec3 n = (q - p).cross(r - p);
+    a[f] = n.dot(p + q + r) > 0 ? 0.5 * n.norm() : -0.5 * n.norm();
+  }
+  const double k = a.sum() / measure.sum();
+  double num = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) num += measure[f] * (a[f] > 0 ? std::abs(std::log(a[f] / (k * measure[f]))) : 10.0);
+  if (areas) *areas = a;
+  return num / measure.sum();
+}
+
+}  // namespace
+
+int sphere_flipped_faces_stored(const MatrixXd& S, const MatrixXi& F) {
+  const MatrixXd R = S.cast<float>().cast<double>();
+  int flips = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    bool bad = false;
+    for (const MatrixXd* X : {&S, &R}) {
+      const Vec3 a = X->row(F(f, 0)).transpose(), b = X->row(F(f, 1)).transpose(), c = X->row(F(f, 2)).transpose();
+      bad = bad || (b - a).cross(c - a).dot(a + b + c) <= 0;
+    }
+    flips += bad;
+  }
+  return flips;
+}
+
+double polish_sphere_face_areas(MatrixXd& S, const MatrixXi& F, const VectorXd& measure, int iterations,
+                                int cg_iterations) {
+  const Eigen::Index nv = S.rows();
+  VectorXd a;
+  double err = sphere_face_error(S, F, measure, &a);
+  const int folded = sphere_flipped_faces(S, F);  // a step may not add any
+  for (int it = 0; it < iterations; ++it) {
+    // Tangent basis per vertex.
+    MatrixXd T1(nv, 3), T2(nv, 3);
+    for (Eigen::Index v = 0; v < nv; ++v) {
+      const Vec3 n = S.row(v).transpose();
+      const Vec3 helper = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+      const Vec3 t1 = n.cross(helper).normalized(), t2 = n.cross(t1);
+      T1.row(v) = t1.transpose();
+      T2.row(v) = t2.transpose();
+    }
+    const double k = a.sum() / measure.sum();
+    std::vector<Eigen::Triplet<double>> t;
+    t.reserve(static_cast<std::size_t>(6 * F.rows()));
+    VectorXd r(F.rows());
+    for (Eigen::Index f = 0; f < F.rows(); ++f) {
+      const double target = k * measure[f], w = 1.0 / std::sqrt(target);
+      Vec3 p[3];
+      for (int c = 0; c < 3; ++c) p[c] = S.row(F(f, c)).transpose();
+      const Vec3 nh = (p[1] - p[0]).cross(p[2] - p[0]).normalized();
+      for (int c = 0; c < 3; ++c) {
+        const int i = F(f, c);
+        const Vec3 g = 0.5 * nh.cross(p[(c + 2) % 3] - p[(c + 1) % 3]);
+        t.emplace_back(static_cast<int>(f), 2 * i, w * g.dot(T1.row(i).transpose()));
+        t.emplace_back(static_cast<int>(f), 2 * i + 1, w * g.dot(T2.row(i).transpose()));
+      }
+      r[f] = w * (a[f] - target);
+    }
+    SparseMatrix J(F.rows(), 2 * nv);
+    J.setFromTriplets(t.begin(), t.end());
+    const SparseMatrix Jt = J.transpose();
+    SparseMatrix N = Jt * J;
+    const VectorXd diag = N.diagonal();
+    for (Eigen::Index c = 0; c < N.rows(); ++c) N.coeffRef(c, c) += 1e-3 * diag[c] + 1e-18;
+    Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper> cg;
+    cg.setMaxIterations(cg_iterations);
+    cg.setTolerance(1e-4);
+    cg.compute(N);
+    const VectorXd delta = cg.solve(VectorXd(-(Jt * r)));
+    // Per-vertex steps: the vertices of faces that would flip halve their step until none does
+    // (as the square map's local_step_positions), so one bad face slows only its own vertices.
+    auto moved = [&](double scale) {
+      VectorXd lam = VectorXd::Constant(nv, scale);
+      MatrixXd next(nv, 3);
+      auto place = [&](Eigen::Index v) {
+        next.row(v) = (S.row(v) + lam[v] * (delta[2 * v] * T1.row(v) + delta[2 * v + 1] * T2.row(v))).normalized();
+      };
+      for (Eigen::Index v = 0; v < nv; ++v) place(v);
+      for (int round = 0; round < 40; ++round) {
+        std::vector<char> halve(static_cast<std::size_t>(nv), 0);
+        bool any = false;
+        for (Eigen::Index f = 0; f < F.rows(); ++f) {
+          const Vec3 p = next.row(F(f, 0)).transpose(), q = next.row(F(f, 1)).transpose(), o = next.row(F(f, 2)).transpose();
+          if ((q - p).cross(o - p).dot(p + q + o) <= 0)
+            for (int c = 0; c < 3; ++c) halve[F(f, c)] = 1, any = true;
+        }
+        if (!any) break;
+        for (Eigen::Index v = 0; v < nv; ++v)
+          if (halve[v]) {
+            lam[v] = round < 30 ? 0.5 * lam[v] : 0.0;
+            place(v);
+          }
+      }
+      return next;
+    };
+    bool better = false;
+    for (double scale = 1.0; scale > 0.1 && !better; scale *= 0.5) {
+      MatrixXd next = moved(scale);
+      VectorXd na;
+      const double e = sphere_face_error(next, F, measure, &na);
+      if (e < err && sphere_flipped_faces(next, F) <= folded) {
+        const bool slow = e > 0.99 * err;
+        S = std::move(next);
+        a = std::move(na);
+        err = e;
+        if (slow) return err;
+        better = true;
+      }
+    }
+    if (!better) break;
+  }
+  return err;
 }
 
 namespace {

@@ -89,4 +89,21 @@ MatrixXd moser_sphere_flow(const MatrixXd& S, const MatrixXi& F, const VectorXd&
 // det(a, b, c) = (b - a) x (c - a) . (a + b + c) is <= 0, i.e. against the outward normal.
 int sphere_flipped_faces(const MatrixXd& S, const MatrixXi& F);
 
+// sphere_flipped_faces of S and of S rounded to float32 (as a GIFTI file stores it): faces
+// folded in either.
+int sphere_flipped_faces_stored(const MatrixXd& S, const MatrixXi& F);
+
+// Per-face polish of a sphere map (the sphere's counterpart of the square map's polish,
+// core/authalic_flow.h): Gauss-Newton steps on the flat (chord) face areas, A_f toward the
+// target share of the sphere's current total, Σ_f (A_f − T_f)² / T_f minimised over tangent
+// displacements of every vertex (two per vertex, ∇_{p_i} A = ½ n̂ × (p_k − p_j)), solved by
+// conjugate gradients on the Levenberg-Marquardt normal equations (μ = 1e-3 diag); the step is
+// halved until no face flips and the per-face error falls; then the points are put back on the
+// sphere. For the sub-triangle errors a background grid cannot see.
+// Inputs: S #V x 3 unit vectors (no flipped face), F #F x 3, face_measure #F (ratios matter),
+// iterations (at most; stops when a step removes less than 1 % of the error). Output: S moved.
+// Returns the area-weighted mean |ln(A_f / T_f)| at the end.
+double polish_sphere_face_areas(MatrixXd& S, const MatrixXi& F, const VectorXd& face_measure, int iterations = 8,
+                                int cg_iterations = 50);
+
 }  // namespace authalic

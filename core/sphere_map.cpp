@@ -230,6 +230,38 @@ std::vector<int> puncture_candidates(const MatrixXd& V, const MatrixXi& F, int c
 
 }  // namespace
 
+bool sphere_covers_once(const MatrixXd& S, const MatrixXi& F) {
+  if (sphere_flipped_faces(S, F) > 0) return false;
+  // Signed spherical triangle areas (Van Oosterom & Strackee 1983) add up to 4π x the map's
+  // degree; chord areas do not bound it (a needle along a great circle has chord area and no
+  // spherical area).
+  double total = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Vec3 a = S.row(F(f, 0)).transpose(), b = S.row(F(f, 1)).transpose(), c = S.row(F(f, 2)).transpose();
+    total += 2.0 * std::atan2(a.dot(b.cross(c)), 1.0 + a.dot(b) + b.dot(c) + c.dot(a));
+  }
+  return std::abs(total - 4.0 * M_PI) < 1e-6 * 4.0 * M_PI;
+}
+
+namespace {
+
+// Last steps of either route: flips repaired, the orientation rule applied; S moves into result.
+void finish_sphere(const MatrixXd& V, const MatrixXi& F, const SphereMapOptions& options, MatrixXd& S,
+                   SphereMapResult& result) {
+  result.flips = sphere_flipped_faces(S, F);
+  if (result.flips > 0) {
+    result.repaired_vertices += repair_sphere_flips(S, F);
+    result.flips = sphere_flipped_faces(S, F);
+  }
+  if (options.orient) {
+    result.rotation = sphere_orientation(V, F, S);
+    S = S * result.rotation.transpose();
+  }
+  result.sphere = std::move(S);
+}
+
+}  // namespace
+
 SphereMapResult authalic_sphere_map(const TriMesh& mesh, const SphereMapOptions& options, const ProgressFn& progress) {
   const MatrixXd& V = mesh.V;
   const MatrixXi& F = mesh.F;
@@ -249,6 +281,26 @@ SphereMapResult authalic_sphere_map(const TriMesh& mesh, const SphereMapOptions&
     throw InputError("surface triangles are oriented inward (negative enclosed volume); reverse the triangle vertex order");
 
   SphereMapResult result;
+  if (options.route != SphereRoute::Flow) {
+    const auto t1 = Clock::now();
+    std::string why;
+    try {
+      MatrixXd S = sphere_from_square_map(V, F, options.square_route, &result.square_route, progress);
+      finish_sphere(V, F, options, S, result);
+      if (!sphere_covers_once(result.sphere, F)) why = "the square route's sphere does not cover it once";
+    } catch (const ProcessingError& e) {
+      if (options.route == SphereRoute::Square) throw;
+      why = e.what();
+    }
+    result.route = SphereRoute::Square;
+    result.seconds_flow = seconds_since(t1);
+    result.conformal = result.sphere;  // this route has no conformal sphere
+    if (why.empty() || options.route == SphereRoute::Square) return result;
+    report(progress, "sphere", -1, why + "; taking the flow route");
+    result = SphereMapResult{};
+    result.fallback_reason = why;
+  }
+  result.route = SphereRoute::Flow;
   const auto t0 = Clock::now();
   report(progress, "conformal", 0.0, "factorising the cotangent matrix");
   const HakerConformalSolver haker(V, F);
@@ -300,19 +352,9 @@ SphereMapResult authalic_sphere_map(const TriMesh& mesh, const SphereMapOptions&
   const auto t1 = Clock::now();
   MatrixXd S = result.conformal;
   if (options.flow) S = moser_sphere_flow(S, F, face_areas(V, F), options.flow_options, &result.flow, progress);
-  result.flips = sphere_flipped_faces(S, F);
-  if (result.flips > 0) {
-    result.repaired_vertices += repair_sphere_flips(S, F);
-    result.flips = sphere_flipped_faces(S, F);
-  }
+  finish_sphere(V, F, options, S, result);
   result.seconds_flow = seconds_since(t1);
-
-  if (options.orient) {
-    result.rotation = sphere_orientation(V, F, S);
-    S = S * result.rotation.transpose();
-    result.conformal = result.conformal * result.rotation.transpose();
-  }
-  result.sphere = std::move(S);
+  if (options.orient) result.conformal = result.conformal * result.rotation.transpose();
   return result;
 }
 

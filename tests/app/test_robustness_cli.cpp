@@ -69,7 +69,7 @@ TEST(RobustnessCli, SphereRefusesAMapThatIsNotAuthalic) {
   const std::string surface = dir + "/ellipsoid.surf.gii";
   io::write_surface(surface, e);
   std::string out;
-  const std::string base = bin() + " sphere " + q(surface) + " " + q(dir + "/s.surf.gii") + " --passes 0 --metrics " +
+  const std::string base = bin() + " sphere " + q(surface) + " " + q(dir + "/s.surf.gii") + " --route flow --passes 0 --metrics " +
                            q(dir + "/m.json");
   EXPECT_EQ(test::run_command(base, &out), 3) << out;
   EXPECT_NE(out.find(surface + ": the sphere map is not authalic"), std::string::npos) << out;

@@ -37,13 +37,40 @@ bool have_evalmap() {
 
 }  // namespace
 
+TEST(SphereCli, NativeResolutionWhiteSurfaceIsAuthalic) {
+  // Issue 12: a real subject's native-resolution white surface (164,000 vertices), where the flow
+  // route folds 221 faces (element CV 0.052); the default route goes through the square map.
+  AUTHALIC_REQUIRE_SHARED(white, "fs741/lh.white.surf.gii");
+  const std::string dir = authalic::test::temp_dir("sphere_fs741");
+  const std::string out = dir + "/lh.sphere.surf.gii", metrics = dir + "/m.json";
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " sphere " + white + " " + out + " --metrics " + metrics + " -q", &output), 0)
+      << output;
+  const auto j = read_json(metrics);
+  EXPECT_EQ(j.at("route"), "square");
+  EXPECT_EQ(j.at("acceptance").at("passed"), true);
+  EXPECT_EQ(j.at("metrics").at("flips"), 0);
+  EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.005);
+  EXPECT_LE(j.at("metrics").at("face_ln_area_abs").at("mean").get<double>(), 0.05);
+  EXPECT_NEAR(j.at("square_route").at("cap_area_fraction").get<double>(), 0.1, 0.01);
+  if (!have_evalmap()) {
+    if (authalic::test::running_in_ci()) FAIL() << "evalmap.py or python3-nibabel missing under CI=true";
+    GTEST_SKIP() << "evalmap.py or python3-nibabel not available";
+  }
+  const std::string evalmap = authalic::test::shared_data("../tools/evalmap.py");
+  ASSERT_EQ(run_command("/usr/bin/python3 " + evalmap + " " + white + " " + out + " --domain sphere --json > " + dir + "/e.json"), 0);
+  const auto e = read_json(dir + "/e.json");
+  EXPECT_EQ(e.at("flips"), 0);
+  EXPECT_LE(e.at("element_area_cv").get<double>(), 0.005);
+}
+
 TEST(SphereCli, WhiteLeftMeetsTheIssueRequirements) {
   AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
   const std::string dir = authalic::test::temp_dir("sphere_cli");
   const std::string out = dir + "/lh.sphere.surf.gii", metrics = dir + "/m.json", png = dir + "/s.png";
   std::string output;
   ASSERT_EQ(run_command(authalic_binary() + " sphere " + white + " " + out + " --metrics " + metrics + " --png " + png +
-                            " --conformal " + dir + "/conformal.surf.gii --area-radius -q",
+                            " --route flow --conformal " + dir + "/conformal.surf.gii --area-radius -q",
                         &output),
             0)
       << output;

@@ -1,15 +1,22 @@
-// The stretch-energy start with its boundary slid by a Moser pass, and the per-face polish:
+// The stretch-energy start with its boundary slid by a Moser pass, the per-face polish (plane and
+// sphere) and the sphere through the square map:
 // the two steps that made native-resolution surfaces authalic (issue 12, fs741's 96 % mask and
 // pial surface). Known answers on small meshes; the real-mesh numbers are in bench/bench_real.sh.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include "common/hard_meshes.h"
 #include "core/authalic_flow.h"
 #include "core/conformal_map.h"
+#include "core/error.h"
 #include "core/metrics.h"
+#include "core/sphere_flow.h"
+#include "core/sphere_from_square.h"
+#include "core/sphere_map.h"
 #include "core/square_map.h"
 #include "core/stretch_energy.h"
 
@@ -146,4 +153,73 @@ TEST(ConformalMap, ClampedCotangentFallbackIsAnEmbeddingSolvedByCholesky) {
   EXPECT_EQ(count_flipped(r.UV, r.F), 0);
   EXPECT_GT(r.cotangent_flips, 0);
   EXPECT_EQ(r.weights, HarmonicWeights::ClampedCotangent);
+}
+
+TEST(SphereFromSquare, ConcentricMapKnownPointsAndEqualArea) {
+  MatrixXd P(5, 2);
+  P << 0, 0, 1, 0, 1, 1, 0, 1, -1, -0.5;
+  const MatrixXd D = concentric_square_to_disk(P);
+  EXPECT_LT((D.row(0)).norm(), 1e-15);
+  EXPECT_LT((D.row(1) - Eigen::RowVector2d(1, 0)).norm(), 1e-12);
+  EXPECT_LT((D.row(2) - Eigen::RowVector2d(std::sqrt(0.5), std::sqrt(0.5))).norm(), 1e-12);
+  EXPECT_LT((D.row(3) - Eigen::RowVector2d(0, 1)).norm(), 1e-12);
+  EXPECT_NEAR(D.row(4).norm(), 1.0, 1e-12);  // the square's boundary goes to the circle
+  // Area scaled by π/4 everywhere: a fine grid of the square covers the disk's area π.
+  const TriMesh g = square_grid(64);
+  const MatrixXd Q = 2.0 * g.V.leftCols(2).array() - 1.0;
+  const VectorXd a = signed_face_areas_2d(concentric_square_to_disk(Q), g.F);
+  EXPECT_GT(a.minCoeff(), 0.0);
+  EXPECT_NEAR(a.sum(), M_PI, 2e-3);  // the inscribed polygon of the circle misses a little
+  const VectorXd a0 = signed_face_areas_2d(Q, g.F);
+  std::vector<double> dev(static_cast<std::size_t>(a.size()));
+  for (Eigen::Index f = 0; f < a.size(); ++f) dev[static_cast<std::size_t>(f)] = std::abs(a[f] / a0[f] / (M_PI / 4) - 1);
+  std::nth_element(dev.begin(), dev.begin() + dev.size() / 2, dev.end());
+  // Straight edges of the grid are bent by the map: a second-order error of a 1/32 triangle.
+  EXPECT_LT(dev[dev.size() / 2], 5e-3);
+}
+
+TEST(SphereFromSquare, SpherePolishRestoresPerturbedAreas) {
+  // Known answer: an icosphere's own chord areas; perturb it tangentially and polish.
+  TriMesh s = icosphere(3);
+  const VectorXd target = face_areas(s.V, s.F);
+  MatrixXd S = s.V;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0, 0.01);
+  for (Eigen::Index v = 0; v < S.rows(); ++v)
+    S.row(v) = (S.row(v) + Eigen::RowVector3d(n(rng), n(rng), n(rng))).normalized();
+  ASSERT_EQ(sphere_flipped_faces(S, s.F), 0);
+  const double before = map_metrics(s.V, S, s.F, MapDomain::Sphere, 8).face_ln_area.mean;
+  const double after = polish_sphere_face_areas(S, s.F, target, 10, 200);
+  EXPECT_EQ(sphere_flipped_faces(S, s.F), 0);
+  EXPECT_LT((S.rowwise().norm().array() - 1).abs().maxCoeff(), 1e-12);
+  EXPECT_LT(after, 0.1 * before);
+}
+
+TEST(SphereFromSquare, NearlyRoundSurfaceCoversTheSphereOnceWithEqualAreas) {
+  // An ellipsoid: the cap and the rest are joined on one circle, the sphere is covered once and
+  // the map is authalic (element CV at 16 x 8 and per-face error small).
+  TriMesh e = icosphere(4);
+  e.V.col(0) *= 1.6;
+  SphereFromSquareReport rep;
+  const MatrixXd S = sphere_from_square_map(e.V, e.F, {}, &rep);
+  EXPECT_TRUE(sphere_covers_once(S, e.F));
+  EXPECT_NEAR(rep.cap_area_fraction, 0.1, 0.02);
+  const MapMetrics m = map_metrics(e.V, S, e.F, MapDomain::Sphere, 8);
+  EXPECT_EQ(m.flips, 0);
+  EXPECT_LT(m.element_cv, 0.02);
+  EXPECT_LT(m.face_ln_area.mean, 0.02);
+}
+
+TEST(SphereFromSquare, AutoRouteFallsBackToTheFlowAndSaysWhy) {
+  // A cap of no area cannot be cut off: the square route fails, Auto takes the flow route and
+  // records why; the explicit square route reports the failure instead.
+  const TriMesh m = icosphere(3);
+  SphereMapOptions o;
+  o.square_route.cap_fraction = 0.0;
+  const SphereMapResult r = authalic_sphere_map(m, o);
+  EXPECT_EQ(r.route, SphereRoute::Flow);
+  EXPECT_NE(r.fallback_reason.find("two disks"), std::string::npos) << r.fallback_reason;
+  EXPECT_TRUE(sphere_covers_once(r.sphere, m.F));
+  o.route = SphereRoute::Square;
+  EXPECT_THROW(authalic_sphere_map(m, o), ProcessingError);
 }

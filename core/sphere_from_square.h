@@ -1,0 +1,62 @@
+#pragma once
+// Authalic map of a closed genus-0 surface onto the unit sphere through the square map, for
+// native-resolution meshes whose conformal sphere crushes deep sulci beyond what the sphere's
+// Moser flow can resolve (fs741 white: 221 flipped faces, element CV 0.052 by that route).
+//
+// The surface is cut into two disks: a cap C (about `cap_fraction` of the area, the vertices
+// geodesically nearest to the surface point closest to the area centroid: on a hemisphere the
+// medial wall) and the rest B. Every step below preserves area, so their composition does:
+//   B: the authalic square map (core/square_map.h: conformal start, stretch energy with the
+//      boundary slid by Moser passes, grid flow, per-face polish), then the square onto the disk
+//      by Shirley & Chiu's concentric map (equal-area up to the constant π/4), then the disk
+//      onto the north cap of area 4π a_B by the inverse Lambert azimuthal equal-area projection;
+//   C: the disk with C's boundary placed where B put it (a strictly convex boundary, so a Tutte
+//      embedding with positive weights cannot fold and no edge needs splitting), made authalic by
+//      the stretch-energy iterations with the boundary held (core/stretch_energy.h), then onto the
+//      south cap by the Lambert projection from the south pole, mirrored so the seam matches.
+// The seam is the circle z = 1 − 2 a_B on both sides (a_B: B's share of the area).
+#include "core/mesh.h"
+#include "core/progress.h"
+#include "core/square_map.h"
+#include "core/stretch_energy.h"
+
+namespace authalic {
+
+// The cap's stretch-energy iterations: with the boundary held they are its whole map, so they run
+// longer than the square map's start (fs741 pial cap: per-face 0.085 after 4 steps).
+inline StretchEnergyOptions cap_stretch_options() {
+  StretchEnergyOptions o;
+  o.max_iterations = 20;
+  o.stop_improvement = 0.95;
+  o.moser_boundary = false;
+  return o;
+}
+
+struct SphereFromSquareOptions {
+  double cap_fraction = 0.1;   // share of the surface area in the cap C
+  SquareMapOptions square;     // for B (orientation rules are switched off: the input is outward)
+  StretchEnergyOptions cap = cap_stretch_options();  // for C (the boundary is always held)
+  int polish_iterations = 8;   // per-face polish on the sphere (core/sphere_flow.h)
+};
+
+struct SphereFromSquareReport {
+  int cap_faces = 0, rest_faces = 0;
+  double cap_area_fraction = 0;  // measured share of C
+  int seed_vertex = -1;          // the cap's centre
+  FlowReport square_flow;        // B's square map: its flow and stretch-energy start
+  StretchEnergyReport square_stretch;
+  StretchEnergyReport cap;       // C's stretch-energy iterations
+  double polish_face_error = 0;  // per-face mean |ln area ratio| after the sphere polish
+};
+
+// Inputs: V #V x 3, F #F x 3 closed, outward-oriented genus-0 surface. Output: #V x 3 points on
+// the unit sphere (faces counter-clockwise seen from outside). Throws ProcessingError when the
+// cut does not give two disks or a part's map folds.
+MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const SphereFromSquareOptions& options = {},
+                                SphereFromSquareReport* report = nullptr, const ProgressFn& progress = {});
+
+// Shirley & Chiu 1997 concentric map of [−1, 1]^2 onto the unit disk: the square's concentric
+// squares go to concentric circles, area scaled by π/4 everywhere. Inputs/outputs: #P x 2.
+MatrixXd concentric_square_to_disk(const MatrixXd& P);
+
+}  // namespace authalic
