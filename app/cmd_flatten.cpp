@@ -373,7 +373,7 @@ void setup(CLI::App& parent) {
   sub->add_option("--fixed-steps", a->fixed_steps,
                   "Mesh method with Zou's fixed schedule of K steps (eq. 19) instead of adaptive steps")
       ->check(CLI::Range(0, 100000));
-  sub->add_flag("--no-polish", a->no_polish, "Skip the final per-vertex Gauss-Newton polish (grid method)");
+  sub->add_flag("--no-polish", a->no_polish, "Skip the final per-face Gauss-Newton polish (grid method)");
   add_max_memory_option(*sub, &a->max_memory);
   sub->add_option("--max-vertices", a->max_vertices,
                   "Largest region (vertices) accepted; the map is validated up to 150k (fsaverage5 subdivided twice)")
