@@ -264,13 +264,7 @@ void run(const FlattenArgs& a) {
                       {"metrics", metrics_json(final_metrics)},
                       {"seconds", {{"map", seconds_map}, {"initial_map", r.seconds_initial}, {"flow", r.seconds_flow}, {"total", seconds}}}};
   if (cleanup) j["region_cleanup"] = region_cleanup_json(*cleanup);
-  const AuthalicAcceptance limits;
-  j["acceptance"] = {{"passed", problem.empty()},
-                     {"problem", problem},
-                     {"limits",
-                      {{"flips", 0},
-                       {"element_cv_32x32", limits.max_element_cv},
-                       {"vertex_ln_area_abs_mean", limits.max_vertex_ln_area}}}};
+  j["acceptance"] = acceptance_json(problem, "32x32");
   j["initial_map"]["stretch_energy"] = {{"iterations", r.stretch.iterations},
                                         {"face_ln_stretch_abs_mean_before", r.stretch.initial_log_stretch},
                                         {"face_ln_stretch_abs_mean_after", r.stretch.final_log_stretch}};

@@ -111,13 +111,7 @@ void run(const SphereArgs& a) {
                       {"flips", r.flips},
                       {"metrics", metrics_json(final_metrics)},
                       {"seconds", {{"conformal", r.seconds_conformal}, {"flow", r.seconds_flow}, {"total", seconds}}}};
-  const AuthalicAcceptance limits;
-  j["acceptance"] = {{"passed", problem.empty()},
-                     {"problem", problem},
-                     {"limits",
-                      {{"flips", 0},
-                       {"element_cv_64x32", limits.max_element_cv},
-                       {"vertex_ln_area_abs_mean", limits.max_vertex_ln_area}}}};
+  j["acceptance"] = acceptance_json(problem, "64x32");
   {
     nlohmann::json rot = nlohmann::json::array();
     for (int i = 0; i < 3; ++i) rot.push_back({r.rotation(i, 0), r.rotation(i, 1), r.rotation(i, 2)});

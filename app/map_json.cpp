@@ -13,6 +13,16 @@ nlohmann::json stats_json(const AbsStats& s) {
 }
 }  // namespace
 
+nlohmann::json acceptance_json(const std::string& problem, const std::string& grid) {
+  const AuthalicAcceptance limits;
+  return {{"passed", problem.empty()},
+          {"problem", problem},
+          {"limits",
+           {{"flips", 0},
+            {"element_cv_" + grid, limits.max_element_cv},
+            {"vertex_ln_area_abs_mean", limits.max_vertex_ln_area}}}};
+}
+
 nlohmann::json metrics_json(const MapMetrics& m) {
   return {{"domain", to_string(m.domain)},
           {"faces", m.faces},

@@ -15,6 +15,10 @@ namespace authalic::app {
 //  "element_max_over_mean", "element_mean_mm2", "surface_area_mm2", "domain_area", "outside_fraction"}
 nlohmann::json metrics_json(const MapMetrics& m);
 
+// The acceptance record of a map (core/metrics.h): passed, the problem ("" if passed) and the
+// limits, the element CV's on the grid named by `grid` (e.g. "32x32").
+nlohmann::json acceptance_json(const std::string& problem, const std::string& grid);
+
 // Writes JSON (2-space indent, trailing newline) atomically.
 void write_json_file(const std::string& path, const nlohmann::json& j);
 

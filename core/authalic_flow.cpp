@@ -362,20 +362,14 @@ MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const Matri
     out(v, 1) = y;
   };
   for (Eigen::Index v = 0; v < nv; ++v) place(v);
-  for (int round = 0; round < 40; ++round) {
-    const VectorXd a = signed_face_areas_2d(out, F);
-    std::vector<char> halve(nv, 0);
-    bool any = false;
-    for (Eigen::Index f = 0; f < nf; ++f)
-      if (!(a[f] > min_area))
-        for (int c = 0; c < 3; ++c) halve[F(f, c)] = 1, any = true;
-    if (!any) break;
-    for (Eigen::Index v = 0; v < nv; ++v)
-      if (halve[v]) {
-        lam[v] = round < 30 ? 0.5 * lam[v] : 0.0;
-        place(v);
-      }
-  }
+  VectorXd a;
+  halve_steps_until_unfolded(
+      F, lam,
+      [&](Eigen::Index f) {
+        if (f == 0) a = signed_face_areas_2d(out, F);  // once per round
+        return !(a[f] > min_area);
+      },
+      place);
   if (steps_out) *steps_out = lam;
   return out;
 }

@@ -68,6 +68,27 @@ std::vector<std::vector<int>> vertex_neighbours(const MatrixXi& F, Eigen::Index 
 // vertex_neighbours), in place.
 void grow_by_rings(std::vector<char>& mark, const std::vector<std::vector<int>>& adj, int rings);
 
+// Per-vertex step control (the flip-preventing steps of the flows and polishes): while some face
+// is folded (folded(f) true), every vertex of such a face halves its step lam[v] and is re-placed
+// (place(v) reads lam); after 30 rounds the steps of those vertices drop to 0 (40 rounds at most).
+// One bad face thus slows only its own vertices. Deterministic (index order).
+template <class Folded, class Place>
+void halve_steps_until_unfolded(const MatrixXi& F, VectorXd& lam, Folded folded, Place place) {
+  for (int round = 0; round < 40; ++round) {
+    std::vector<char> halve(static_cast<std::size_t>(lam.size()), 0);
+    bool any = false;
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      if (folded(f))
+        for (int c = 0; c < 3; ++c) halve[F(f, c)] = 1, any = true;
+    if (!any) break;
+    for (Eigen::Index v = 0; v < lam.size(); ++v)
+      if (halve[v]) {
+        lam[v] = round < 30 ? 0.5 * lam[v] : 0.0;
+        place(v);
+      }
+  }
+}
+
 // Connected components over faces (sharing an edge or a vertex counts as connected): per-face
 // component id, ids 0..n-1 in order of first face.
 VectorXi face_components(const MatrixXi& F, int num_vertices, int* num_components = nullptr);

@@ -283,21 +283,13 @@ double polish_sphere_face_areas(MatrixXd& S, const MatrixXi& F, const VectorXd& 
         next.row(v) = (S.row(v) + lam[v] * (delta[2 * v] * T1.row(v) + delta[2 * v + 1] * T2.row(v))).normalized();
       };
       for (Eigen::Index v = 0; v < nv; ++v) place(v);
-      for (int round = 0; round < 40; ++round) {
-        std::vector<char> halve(static_cast<std::size_t>(nv), 0);
-        bool any = false;
-        for (Eigen::Index f = 0; f < F.rows(); ++f) {
-          const Vec3 p = next.row(F(f, 0)).transpose(), q = next.row(F(f, 1)).transpose(), o = next.row(F(f, 2)).transpose();
-          if ((q - p).cross(o - p).dot(p + q + o) <= 0)
-            for (int c = 0; c < 3; ++c) halve[F(f, c)] = 1, any = true;
-        }
-        if (!any) break;
-        for (Eigen::Index v = 0; v < nv; ++v)
-          if (halve[v]) {
-            lam[v] = round < 30 ? 0.5 * lam[v] : 0.0;
-            place(v);
-          }
-      }
+      halve_steps_until_unfolded(
+          F, lam,
+          [&](Eigen::Index f) {
+            const Vec3 p = next.row(F(f, 0)).transpose(), q = next.row(F(f, 1)).transpose(), o = next.row(F(f, 2)).transpose();
+            return (q - p).cross(o - p).dot(p + q + o) <= 0;
+          },
+          place);
       return next;
     };
     bool better = false;
