@@ -1,7 +1,8 @@
 #pragma once
 // A roughly authalic start for the area-restoring flow: fixed-point iterations of the stretch
 // energy minimisation of Yueh, Lin, Wu & Yau 2019 (J. Sci. Comput. 78, Algorithm 1), with the
-// boundary held where the initial map put it.
+// boundary on the rectangle's sides: slid along them by one Moser grid pass per iteration
+// (moser_boundary), or held where the initial map put it.
 //
 // The stretch energy E_S(f) = ½ Σ_τ σ(τ) E_D,τ(f), with σ(τ) = |f(τ)| / |τ| the triangle's
 // stretch (map area over target measure, both normalised to equal totals; Yueh's 1/σ_{f⁻¹}), is
@@ -38,8 +39,12 @@ struct StretchEnergyReport {
 // Inputs: V #V x 3 surface, F #F x 3 faces of a disk (oriented so UV0 is counter-clockwise),
 // face_target #F measure each face should receive (its area, or area x density), UV0 #V x 2
 // initial map without flipped triangles in [0, W] x [0, 1], side_mask #V RectangleSide bits
-// (core/conformal_map.h): the boundary vertices (non-zero) are held. (Letting them slide along
-// their sides folds triangles after two steps on fs741's 96 % mask, so they stay.)
+// (core/conformal_map.h) of the boundary vertices (non-zero), width W. With moser_boundary they
+// move along their sides by the Moser velocity of the current map (corners stay; the move is
+// halved until the re-solve is an embedding and lowers the error): held at arc length, a jagged
+// stretch of border keeps too much perimeter (fs741's 96 % mask: one corner 30x inflated).
+// Letting them slide freely inside the energy instead (a free boundary) folds triangles after two
+// steps there. Without moser_boundary they are held (any convex boundary: W is unused).
 // Output: #V x 2 map; the vertices not used by F and the fixed ones keep UV0.
 MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd& face_target, const MatrixXd& UV0,
                             const VectorXi& side_mask, double width, const StretchEnergyOptions& options = {},
