@@ -22,12 +22,10 @@
 
 namespace authalic {
 
-// The cap's stretch-energy iterations: with the boundary held they are its whole map, so they run
-// longer than the square map's start (fs741 pial cap: per-face 0.085 after 4 steps).
+// The cap's stretch-energy iterations, boundary held. (Longer runs buy little: fs741 pial cap
+// 0.085 -> 0.074 per face with 20 steps at 95 %, sphere CV 0.0124 -> 0.0112, for 2 s more.)
 inline StretchEnergyOptions cap_stretch_options() {
   StretchEnergyOptions o;
-  o.max_iterations = 20;
-  o.stop_improvement = 0.95;
   o.moser_boundary = false;
   return o;
 }
