@@ -269,37 +269,6 @@ Hemisphere mirror_hemisphere(const Hemisphere& in) {
   return out;
 }
 
-VectorXd edge_path_distances(const TriMesh& mesh, const std::vector<bool>& allowed, int source) {
-  const int n = mesh.num_vertices();
-  VectorXd dist = VectorXd::Constant(n, std::numeric_limits<double>::infinity());
-  if (source < 0 || source >= n || !allowed[source]) return dist;
-  std::vector<std::vector<int>> adj(static_cast<std::size_t>(n));
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const int a = mesh.F(f, k), b = mesh.F(f, (k + 1) % 3);
-      adj[a].push_back(b);
-      adj[b].push_back(a);
-    }
-  }
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
-  dist(source) = 0.0;
-  queue.emplace(0.0, source);
-  while (!queue.empty()) {
-    const auto [d, v] = queue.top();
-    queue.pop();
-    if (d > dist(v)) continue;
-    for (int w : adj[v]) {
-      if (!allowed[w]) continue;
-      const double nd = d + (mesh.V.row(v) - mesh.V.row(w)).norm();
-      if (nd < dist(w)) {
-        dist(w) = nd;
-        queue.emplace(nd, w);
-      }
-    }
-  }
-  return dist;
-}
 
 // ---- PET ----------------------------------------------------------------------------------
 

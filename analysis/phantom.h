@@ -78,9 +78,8 @@ bool inside_synthetic_white(const Eigen::Vector3d& p, const SyntheticHemisphereO
 // x -> -x with the faces re-oriented (counter-clockwise seen from outside stays true).
 Hemisphere mirror_hemisphere(const Hemisphere& hemisphere);
 
-// Geodesic distance approximated by shortest paths along the edges of `mesh` (Dijkstra), only
-// through vertices with allowed[v]; unreachable vertices get +inf. mm for cortical surfaces.
-VectorXd edge_path_distances(const TriMesh& mesh, const std::vector<bool>& allowed, int source);
+// Shortest-path distances along the edges (core/mesh.h).
+using authalic::edge_path_distances;
 
 // ---- PET ---------------------------------------------------------------------------------------
 

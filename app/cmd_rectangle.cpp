@@ -126,28 +126,37 @@ Combined combine(const std::vector<const RectanglePart*>& parts) {
   return c;
 }
 
+// The parts as one mesh, its metrics on the acceptance grid (2K x K with K = 32) and the
+// acceptance problem ("" = passed), computed once for the check and the outputs.
+struct Checked {
+  Combined all;
+  MapMetrics at32;
+  std::string problem;
+};
+
 // Acceptance (core/metrics.h) before anything is written: a rectangle that is not authalic is a
-// failure (exit 3, nothing written), unless --keep-failed. Returns the problem ("" = passed).
-std::string check_acceptance(const RectangleArgs& a, const std::vector<const RectanglePart*>& parts, const std::string& what) {
-  const Combined c = combine(parts);
-  const MapMetrics m = map_metrics(c.V, c.UV, c.F, MapDomain::Rectangle, 32);
-  const std::string problem = authalic_acceptance_problem(m, m.vertex_ln_area.mean, true);
-  if (!problem.empty() && !a.keep_failed)
-    throw ProcessingError(what + ": the rectangle map is not authalic: " + problem +
+// failure (exit 3, nothing written), unless --keep-failed.
+Checked check_acceptance(const RectangleArgs& a, const std::vector<const RectanglePart*>& parts, const std::string& what) {
+  Checked c{combine(parts), {}, {}};
+  c.at32 = map_metrics(c.all.V, c.all.UV, c.all.F, MapDomain::Rectangle, 32);
+  c.problem = authalic_acceptance_problem(c.at32, c.at32.vertex_ln_area.mean, true);
+  if (!c.problem.empty() && !a.keep_failed)
+    throw ProcessingError(what + ": the rectangle map is not authalic: " + c.problem +
                           "; nothing was written. --keep-failed writes the map for inspection, marked as failed");
-  return problem;
+  return c;
 }
 
 // Writes metrics, pictures and the requested extra surfaces for one or two parts.
 void finish(const RectangleArgs& a, const std::vector<const RectanglePart*>& parts, const std::vector<VectorXd>& shading,
-            nlohmann::json j, double seconds, const std::string& what, const std::string& problem) {
-  const Combined all = combine(parts);
+            nlohmann::json j, double seconds, const std::string& what, const Checked& checked) {
+  const Combined& all = checked.all;
+  const std::string& problem = checked.problem;
   const MatrixXd &V = all.V, &UV = all.UV, &UV0 = all.UV0;
   const MatrixXi& F = all.F;
   VectorXd values(V.rows());
   for (std::size_t i = 0, ov = 0; i < parts.size(); ov += parts[i]->V.rows(), ++i)
     values.segment(static_cast<Eigen::Index>(ov), parts[i]->V.rows()) = part_values(*parts[i], shading[i]);
-  const MapMetrics m = map_metrics(V, UV, F, MapDomain::Rectangle, a.k);
+  const MapMetrics m = a.k == 32 ? checked.at32 : map_metrics(V, UV, F, MapDomain::Rectangle, a.k);
   j["metrics"] = metrics_json(m);
   j["acceptance"] = acceptance_json(problem, "64x32");
   j["extent"] = {UV.col(0).minCoeff(), UV.col(1).minCoeff(), UV.col(0).maxCoeff(), UV.col(1).maxCoeff()};
@@ -218,7 +227,8 @@ void run_one_surface(const RectangleArgs& a) {
     throw InputError(a.surface + ": " + e.what());
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const std::string problem = check_acceptance(a, {&r.map}, a.surface);
+  const Checked checked = check_acceptance(a, {&r.map}, a.surface);
+  const std::string& problem = checked.problem;
   const std::string structure = s.metadata.count("AnatomicalStructurePrimary") ? s.metadata.at("AnatomicalStructurePrimary") : "";
   io::write_surface(a.out, as_flat_mesh(r.map.UV, r.map.F), flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)", problem));
   const std::string stem = stem_of(a.out);
@@ -248,7 +258,7 @@ void run_one_surface(const RectangleArgs& a) {
                       {"initial_attempts", r.attempts},
                       {"sphere_flips", r.sphere_flips},
                       {"part", part_json(r.map)}};
-  finish(a, {&r.map}, {shading}, j, seconds, a.surface, problem);
+  finish(a, {&r.map}, {shading}, j, seconds, a.surface, checked);
 }
 
 void run_two_hemispheres(const RectangleArgs& a) {
@@ -264,7 +274,8 @@ void run_two_hemispheres(const RectangleArgs& a) {
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const std::string what = a.lh + ", " + a.rh;
-  const std::string problem = check_acceptance(a, {&r.left, &r.right}, what);
+  const Checked checked = check_acceptance(a, {&r.left, &r.right}, what);
+  const std::string& problem = checked.problem;
   const std::string lpath = a.out + ".lh.surf.gii", rpath = a.out + ".rh.surf.gii";
   io::write_surface(lpath, as_flat_mesh(r.left.UV, r.left.F), flat_options("CortexLeft", "rectangle [0,2]x[0,1], left part", problem));
   io::write_surface(rpath, as_flat_mesh(r.right.UV, r.right.F), flat_options("CortexRight", "rectangle [0,2]x[0,1], right part", problem));
@@ -285,7 +296,7 @@ void run_two_hemispheres(const RectangleArgs& a) {
                       {"layout", "left hemisphere on [0, split], right (mirrored) on [split, 2]; anterior at the top middle of each part"},
                       {"left", part_json(r.left)},
                       {"right", part_json(r.right)}};
-  finish(a, {&r.left, &r.right}, {shading(ls, a.lh_sulc), shading(rs, a.rh_sulc)}, j, seconds, what, problem);
+  finish(a, {&r.left, &r.right}, {shading(ls, a.lh_sulc), shading(rs, a.rh_sulc)}, j, seconds, what, checked);
 }
 
 void setup(CLI::App& parent) {

@@ -158,8 +158,8 @@ int untangle_flips(const MatrixXi& F, const VectorXi& side_mask, double width, c
 // (fs741 96 % mask: 37 such corner slivers were "thin" under a floor of 4 ε max(W, 1) x the
 // longest edge, though each survives float32 by a factor of 1000). A triangle of the surface
 // that is almost degenerate has an almost degenerate authalic image; at this floor it is kept
-// open enough to be read back unflipped. `width` is unused (kept for the callers' symmetry).
-VectorXd single_precision_area_floor(const MatrixXd& UV, const MatrixXi& F, double width);
+// open enough to be read back unflipped.
+VectorXd single_precision_area_floor(const MatrixXd& UV, const MatrixXi& F);
 
 // Opens the triangles whose signed area is not above min_area (#F) by the smallest move: the
 // vertex opposite the longest edge is pushed off it, perpendicular, to twice the floor (a side

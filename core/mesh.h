@@ -68,6 +68,10 @@ std::vector<std::vector<int>> vertex_neighbours(const MatrixXi& F, Eigen::Index 
 // vertex_neighbours), in place.
 void grow_by_rings(std::vector<char>& mark, const std::vector<std::vector<int>>& adj, int rings);
 
+// Geodesic distance approximated by shortest paths along the edges of `mesh` (Dijkstra), only
+// through vertices with allowed[v]; unreachable vertices get +inf. mm for cortical surfaces.
+VectorXd edge_path_distances(const TriMesh& mesh, const std::vector<bool>& allowed, int source);
+
 // Per-vertex step control (the flip-preventing steps of the flows and polishes): while some face
 // is folded (folded(f) true), every vertex of such a face halves its step lam[v] and is re-placed
 // (place(v) reads lam); after 30 rounds the steps of those vertices drop to 0 (40 rounds at most).

@@ -1,6 +1,7 @@
 #include "core/sparse_cholesky.h"
 
 #include <Eigen/CholmodSupport>
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
 
 namespace authalic {
@@ -53,6 +54,18 @@ bool SpdSolver::ok() const { return impl_->ok; }
 MatrixXd SpdSolver::solve(const MatrixXd& B) const {
   if (impl_->use_fallback) return impl_->fallback.solve(B);
   return impl_->cholmod.solve(B);
+}
+
+VectorXd levenberg_marquardt_step(const SparseMatrix& J, const VectorXd& r, int cg_iterations) {
+  const SparseMatrix Jt = J.transpose();
+  SparseMatrix N = Jt * J;
+  const VectorXd diag = N.diagonal();
+  for (Eigen::Index c = 0; c < N.rows(); ++c) N.coeffRef(c, c) += 1e-3 * diag[c] + 1e-18;
+  Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper> cg;
+  cg.setMaxIterations(cg_iterations);
+  cg.setTolerance(1e-4);
+  cg.compute(N);
+  return cg.solve(VectorXd(-(Jt * r)));
 }
 
 }  // namespace authalic

@@ -1,7 +1,6 @@
 // Moser's area-restoring flow on the sphere over a fixed cube-sphere background (see sphere_flow.h).
 #include "core/sphere_flow.h"
 
-#include <Eigen/IterativeLinearSolvers>
 
 #include <Eigen/CholmodSupport>
 
@@ -14,6 +13,7 @@
 #include <unordered_map>
 
 #include "core/error.h"
+#include "core/sparse_cholesky.h"
 
 namespace authalic {
 
@@ -265,15 +265,7 @@ double polish_sphere_face_areas(MatrixXd& S, const MatrixXi& F, const VectorXd& 
     }
     SparseMatrix J(F.rows(), 2 * nv);
     J.setFromTriplets(t.begin(), t.end());
-    const SparseMatrix Jt = J.transpose();
-    SparseMatrix N = Jt * J;
-    const VectorXd diag = N.diagonal();
-    for (Eigen::Index c = 0; c < N.rows(); ++c) N.coeffRef(c, c) += 1e-3 * diag[c] + 1e-18;
-    Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper> cg;
-    cg.setMaxIterations(cg_iterations);
-    cg.setTolerance(1e-4);
-    cg.compute(N);
-    const VectorXd delta = cg.solve(VectorXd(-(Jt * r)));
+    const VectorXd delta = levenberg_marquardt_step(J, r, cg_iterations);
     // Per-vertex steps: the vertices of faces that would flip halve their step until none does
     // (as the square map's local_step_positions), so one bad face slows only its own vertices.
     auto moved = [&](double scale) {

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
-#include <queue>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -20,32 +19,6 @@
 
 namespace authalic {
 namespace {
-
-// Geodesic distance along edges (Dijkstra) from `seed` to every vertex.
-VectorXd edge_distance_from(const MatrixXd& V, const MatrixXi& F, int seed) {
-  const Eigen::Index nv = V.rows();
-  std::vector<std::vector<std::pair<int, double>>> adj(static_cast<std::size_t>(nv));
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int i = F(f, c), j = F(f, (c + 1) % 3);
-      const double l = (V.row(i) - V.row(j)).norm();
-      adj[i].emplace_back(j, l);
-      adj[j].emplace_back(i, l);
-    }
-  VectorXd d = VectorXd::Constant(nv, std::numeric_limits<double>::infinity());
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> q;
-  d[seed] = 0;
-  q.emplace(0.0, seed);
-  while (!q.empty()) {
-    const auto [dv, v] = q.top();
-    q.pop();
-    if (dv > d[v]) continue;
-    for (const auto& [u, l] : adj[v])
-      if (dv + l < d[u]) d[u] = dv + l, q.emplace(d[u], u);
-  }
-  return d;
-}
 
 // The cap: the vertices nearest (along edges) to the surface point closest to the area
 // centroid, until they carry `fraction` of the area; cleaned to one disk (core/region.h).
@@ -62,7 +35,7 @@ RegionCleanup choose_cap(const MatrixXd& V, const MatrixXi& F, double fraction, 
     if (e < best) best = e, seed = static_cast<int>(v);  // ties: the lowest index
   }
   *seed_out = seed;
-  const VectorXd d = edge_distance_from(V, F, seed);
+  const VectorXd d = edge_path_distances(TriMesh{V, F}, std::vector<bool>(static_cast<std::size_t>(V.rows()), true), seed);
   const VectorXd va = barycentric_vertex_areas(V, F);
   std::vector<int> order(static_cast<std::size_t>(V.rows()));
   std::iota(order.begin(), order.end(), 0);

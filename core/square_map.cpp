@@ -137,7 +137,7 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   // precision (images of almost degenerate surface triangles) are opened by the smallest move, so
   // the file a user reads has no flipped triangle (measured: fs741 pial, 16 of 295,000 read back
   // flipped before). Untangling is the fall-back (it moves whole one-rings).
-  const VectorXd floor = single_precision_area_floor(R.UV, R.F, opt.width);
+  const VectorXd floor = single_precision_area_floor(R.UV, R.F);
   R.flips = open_thin_triangles(R.F, R.side_mask, opt.width, floor, R.UV);
   if (R.flips > 0) untangle_flips(R.F, R.side_mask, opt.width, floor, R.UV, &R.flips);
   if (R.flips > 0)
