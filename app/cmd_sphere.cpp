@@ -139,6 +139,10 @@ void run(const SphereArgs& a) {
                            {"cap_stretch_energy", {{"iterations", q.cap.iterations},
                                                    {"face_ln_stretch_abs_mean_before", q.cap.initial_log_stretch},
                                                    {"face_ln_stretch_abs_mean_after", q.cap.final_log_stretch}}},
+                           {"coarse_sphere_pass", {{"grid_cells_per_edge", q.sphere_flow.grid_cells},
+                                                   {"passes", q.sphere_flow.passes.size()},
+                                                   {"density_min", q.sphere_flow.passes.empty() ? 0.0 : q.sphere_flow.passes[0].rho_min},
+                                                   {"density_max", q.sphere_flow.passes.empty() ? 0.0 : q.sphere_flow.passes[0].rho_max}}},
                            {"sphere_polish_face_ln_area_abs_mean", q.polish_face_error}};
     }
   }

@@ -14,9 +14,12 @@
 //      embedding with positive weights cannot fold and no edge needs splitting), made authalic by
 //      the stretch-energy iterations with the boundary held (core/stretch_energy.h), then onto the
 //      south cap by the Lambert projection from the south pole, mirrored so the seam matches.
-// The seam is the circle z = 1 − 2 a_B on both sides (a_B: B's share of the area).
+// The seam is the circle z = 1 − 2 a_B on both sides (a_B: B's share of the area). The joined
+// map is finished on the sphere: flips repaired, one coarse Moser pass (core/sphere_flow.h) for
+// the parts' boundary layers along the seam, and the per-face polish.
 #include "core/mesh.h"
 #include "core/progress.h"
+#include "core/sphere_flow.h"
 #include "core/square_map.h"
 #include "core/stretch_energy.h"
 
@@ -30,10 +33,19 @@ inline StretchEnergyOptions cap_stretch_options() {
   return o;
 }
 
+// One Moser pass on a coarse background (32 cells per cube edge) after the parts are joined.
+inline SphereFlowOptions coarse_sphere_flow_options() {
+  SphereFlowOptions o;
+  o.grid_cells = 32;
+  o.max_passes = 1;
+  return o;
+}
+
 struct SphereFromSquareOptions {
   double cap_fraction = 0.1;   // share of the surface area in the cap C
   SquareMapOptions square;     // for B (orientation rules are switched off: the input is outward)
   StretchEnergyOptions cap = cap_stretch_options();  // for C (the boundary is always held)
+  SphereFlowOptions sphere_flow = coarse_sphere_flow_options();  // then on the whole sphere
   int polish_iterations = 8;   // per-face polish on the sphere (core/sphere_flow.h)
 };
 
@@ -44,6 +56,7 @@ struct SphereFromSquareReport {
   FlowReport square_flow;        // B's square map: its flow and stretch-energy start
   StretchEnergyReport square_stretch;
   StretchEnergyReport cap;       // C's stretch-energy iterations
+  SphereFlowReport sphere_flow;  // the coarse pass on the joined sphere
   double polish_face_error = 0;  // per-face mean |ln area ratio| after the sphere polish
 };
 

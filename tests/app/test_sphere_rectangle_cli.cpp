@@ -50,9 +50,11 @@ TEST(SphereCli, NativeResolutionWhiteSurfaceIsAuthalic) {
   EXPECT_EQ(j.at("route"), "square");
   EXPECT_EQ(j.at("acceptance").at("passed"), true);
   EXPECT_EQ(j.at("metrics").at("flips"), 0);
-  EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.005);
+  // 0.005 required; 0.0012 measured (0.0020 before the coarse pass on the joined sphere).
+  EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.0017);
   EXPECT_LE(j.at("metrics").at("face_ln_area_abs").at("mean").get<double>(), 0.05);
   EXPECT_NEAR(j.at("square_route").at("cap_area_fraction").get<double>(), 0.1, 0.01);
+  EXPECT_EQ(j.at("square_route").at("coarse_sphere_pass").at("passes"), 1);
   if (!have_evalmap()) {
     if (authalic::test::running_in_ci()) FAIL() << "evalmap.py or python3-nibabel missing under CI=true";
     GTEST_SKIP() << "evalmap.py or python3-nibabel not available";
@@ -61,7 +63,7 @@ TEST(SphereCli, NativeResolutionWhiteSurfaceIsAuthalic) {
   ASSERT_EQ(run_command("/usr/bin/python3 " + evalmap + " " + white + " " + out + " --domain sphere --json > " + dir + "/e.json"), 0);
   const auto e = read_json(dir + "/e.json");
   EXPECT_EQ(e.at("flips"), 0);
-  EXPECT_LE(e.at("element_area_cv").get<double>(), 0.005);
+  EXPECT_LE(e.at("element_area_cv").get<double>(), 0.0017);
 }
 
 TEST(SphereCli, WhiteLeftMeetsTheIssueRequirements) {

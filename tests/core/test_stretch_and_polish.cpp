@@ -210,6 +210,30 @@ TEST(SphereFromSquare, NearlyRoundSurfaceCoversTheSphereOnceWithEqualAreas) {
   EXPECT_LT(m.face_ln_area.mean, 0.02);
 }
 
+TEST(SphereFromSquare, CoarseSpherePassDoesNoHarmWhereNothingIsLeft) {
+  // The coarse Moser pass on the joined sphere is for element-scale error along the seam of
+  // native meshes (fs741 pial: CV 0.0124 -> 0.0083, SphereCli.NativeResolutionPialSurface...).
+  // On a smooth 10k-vertex surface the joined map has none left: the pass runs (it is on by
+  // default), keeps the sphere covered once without flips, and does not raise the element CV.
+  TriMesh e = icosphere(5);
+  for (Eigen::Index v = 0; v < e.V.rows(); ++v) {
+    const double x = e.V(v, 0), y = e.V(v, 1), z = e.V(v, 2);
+    e.V.row(v) *= 1.0 + 0.25 * std::sin(3 * x) * std::cos(2 * y) + 0.15 * z * z;
+  }
+  e.V.col(0) *= 1.5;
+  SphereFromSquareOptions without;
+  without.sphere_flow.max_passes = 0;
+  const MatrixXd S0 = sphere_from_square_map(e.V, e.F, without);
+  SphereFromSquareReport rep;
+  const MatrixXd S1 = sphere_from_square_map(e.V, e.F, {}, &rep);
+  ASSERT_EQ(rep.sphere_flow.passes.size(), 1u);
+  EXPECT_TRUE(sphere_covers_once(S1, e.F));
+  const MapMetrics m0 = map_metrics(e.V, S0, e.F, MapDomain::Sphere, 16), m1 = map_metrics(e.V, S1, e.F, MapDomain::Sphere, 16);
+  EXPECT_EQ(m1.flips, 0);
+  EXPECT_LT(m1.element_cv, 0.003);
+  EXPECT_LT(m1.element_cv, 1.1 * m0.element_cv) << "without " << m0.element_cv << ", with " << m1.element_cv;
+}
+
 TEST(SphereFromSquare, AutoRouteFallsBackToTheFlowAndSaysWhy) {
   // A cap of no area cannot be cut off: the square route fails, Auto takes the flow route and
   // records why; the explicit square route reports the failure instead.
