@@ -25,7 +25,9 @@
 //    schedule (seed 000 eq. 19), boundary vertices sliding along their side, corners fixed.
 //  - Polish (after Grid, on by default): Gauss-Newton steps on the per-face areas of the output
 //    connectivity (face_area_newton_displacement), kept only while they lower the per-face error
-//    without flipping; for the sub-cell errors a grid cannot see (native meshes).
+//    without flipping; for the sub-cell errors a grid cannot see (native meshes). Then local
+//    steps about the faces still beyond polish_far_band, judged on their own error (a few faces
+//    far off, e.g. at a corner where the Neumann field vanishes, never move the global error).
 // Measure control (DLF section 5.5): an optional per-vertex density multiplies the surface area
 // element, so a region of density 2 receives twice its natural share of the domain.
 #include <string>
@@ -62,6 +64,7 @@ struct FlowOptions {
   int max_iterations = 200;      // mesh steps (Mesh method); polish uses polish_iterations
   int polish_iterations = 16;    // at most; it stops when a step removes less than 1 % of the per-face error
   double polish_band = 0.05;     // polish corrects faces whose |ln area ratio| exceeds this band
+  double polish_far_band = 0.5;  // then local steps about the faces still beyond this one
   int polish_cg_iterations = 50; // conjugate-gradient iterations per polish step (inexact Newton)
   int polish_rings = 3;          // vertices within this many rings of an out-of-band vertex move
   double theta = 0.5;            // fraction of the critical flip-preventing step (DLF eq. 5)
