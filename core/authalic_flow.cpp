@@ -816,21 +816,21 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
   // per-vertex error by more than 5 %. The grid flow leaves sub-cell errors the grid cannot see
   // (a native pial surface: per-vertex mean 0.028 after the passes, 0.004 after the polish).
   if (opt.polish && opt.method == FlowMethod::Grid && remaining == 0) {
+    // The vertices of the faces beyond `band` and polish_rings rings around them (through each
+    // face's next corner: a boundary vertex does not reach back along the boundary).
     std::vector<std::vector<int>> ring(nv);
     for (Eigen::Index f = 0; f < F.rows(); ++f)
       for (int c = 0; c < 3; ++c) ring[F(f, c)].push_back(F(f, (c + 1) % 3));
+    auto free_around = [&](double band, std::vector<char>& free_vertex) {
+      const int n = faces_outside_band(target, UV, F, band, free_vertex);
+      grow_by_rings(free_vertex, ring, opt.polish_rings);
+      return n;
+    };
     double cur_face = face_log_ratio_mean(target, UV, F);
     for (int k = 0; k < opt.polish_iterations; ++k) {
       std::vector<char> free_vertex(nv, 0);
-      const int bad = faces_outside_band(target, UV, F, opt.polish_band, free_vertex);
+      const int bad = free_around(opt.polish_band, free_vertex);
       if (bad == 0) break;
-      for (int grow = 0; grow < opt.polish_rings; ++grow) {
-        std::vector<char> next = free_vertex;
-        for (int v = 0; v < nv; ++v)
-          if (free_vertex[v])
-            for (int u : ring[v]) next[u] = 1;
-        free_vertex.swap(next);
-      }
       const MatrixXd D = face_area_newton_displacement(UV, F, target, side_mask, free_vertex, opt.polish_cg_iterations);
       MatrixXd next;
       double fm = 0;
@@ -861,15 +861,8 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
     // them, judged on their own error, kept only if the whole map's errors do not rise.
     for (int k = 0; k < opt.polish_iterations; ++k) {
       std::vector<char> free_vertex(nv, 0);
-      const int far = faces_outside_band(target, UV, F, opt.polish_far_band, free_vertex);
+      const int far = free_around(opt.polish_far_band, free_vertex);
       if (far == 0) break;
-      for (int grow = 0; grow < opt.polish_rings; ++grow) {
-        std::vector<char> next = free_vertex;
-        for (int v = 0; v < nv; ++v)
-          if (free_vertex[v])
-            for (int u : ring[v]) next[u] = 1;
-        free_vertex.swap(next);
-      }
       std::vector<int> local_faces;
       for (Eigen::Index f = 0; f < F.rows(); ++f)
         if (free_vertex[F(f, 0)] || free_vertex[F(f, 1)] || free_vertex[F(f, 2)]) local_faces.push_back(static_cast<int>(f));
