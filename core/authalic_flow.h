@@ -64,7 +64,7 @@ struct FlowOptions {
   int max_iterations = 200;      // mesh steps (Mesh method); polish uses polish_iterations
   int polish_iterations = 16;    // at most; it stops when a step removes less than 1 % of the per-face error
   double polish_band = 0.05;     // polish corrects faces whose |ln area ratio| exceeds this band
-  double polish_far_band = 0.5;  // then local steps about the faces still beyond this one
+  double polish_far_band = 0.5;  // then (up to polish_iterations) local steps about the faces still beyond this
   int polish_cg_iterations = 50; // conjugate-gradient iterations per polish step (inexact Newton)
   int polish_rings = 3;          // vertices within this many rings of an out-of-band vertex move
   double theta = 0.5;            // fraction of the critical flip-preventing step (DLF eq. 5)
