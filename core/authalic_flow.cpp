@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -827,29 +828,37 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
       return n;
     };
     double cur_face = face_log_ratio_mean(target, UV, F);
+    // Halving line search on a polish step D: the first scale (1, 1/2, 1/4) whose flip-safe
+    // positions `accept` takes (it sets their per-face error and per-vertex stats) is kept.
+    auto line_search = [&](const MatrixXd& D, const std::function<bool(const MatrixXd&, double&, Stats&)>& accept) {
+      for (double scale = 1.0; scale > 0.1; scale *= 0.5) {
+        MatrixXd next = local_step_positions(UV, F, scale * D, opt.theta, side_mask, w, min_area);
+        double fm = 0;
+        Stats st;
+        if (!accept(next, fm, st)) continue;
+        UV = std::move(next);
+        cur = st;
+        cur_face = fm;
+        return true;
+      }
+      return false;
+    };
     for (int k = 0; k < opt.polish_iterations; ++k) {
       std::vector<char> free_vertex(nv, 0);
       const int bad = free_around(opt.polish_band, free_vertex);
       if (bad == 0) break;
       const MatrixXd D = face_area_newton_displacement(UV, F, target, side_mask, free_vertex, opt.polish_cg_iterations);
-      MatrixXd next;
-      double fm = 0;
-      Stats s;
-      bool better = false;
-      for (double scale = 1.0; scale > 0.1 && !better; scale *= 0.5) {
-        next = local_step_positions(UV, F, scale * D, opt.theta, side_mask, w, min_area);
+      const double before = cur_face;
+      const bool better = line_search(D, [&](const MatrixXd& next, double& fm, Stats& st) {
         fm = face_log_ratio_mean(target, next, F);
-        s = stats_of(next);
-        better = fm < cur_face && s.mean <= cur.mean * 1.05;
-      }
+        st = stats_of(next);
+        return fm < cur_face && st.mean <= cur.mean * 1.05;
+      });
       if (!better) break;
-      const bool slow = fm > 0.99 * cur_face;
-      UV = std::move(next);
-      cur = s;
-      cur_face = fm;
+      const bool slow = cur_face > 0.99 * before;
       ++rep.polish_iterations;
       std::ostringstream msg;
-      msg << "polish " << k + 1 << " (" << bad << " faces outside the band): per-face mean |ln ratio| " << fm
+      msg << "polish " << k + 1 << " (" << bad << " faces outside the band): per-face mean |ln ratio| " << cur_face
           << ", per-vertex mean " << cur.mean << ", p99 " << cur.p99;
       report(progress, "flow", -1, msg.str());
       if (slow) break;
@@ -874,21 +883,14 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
       }
       const double local_before = face_log_ratio_mean(tl, UV, Fl);
       const MatrixXd D = face_area_newton_displacement(UV, F, target, side_mask, free_vertex, opt.polish_cg_iterations);
-      bool better = false;
       double local_after = local_before;
-      for (double scale = 1.0; scale > 0.1 && !better; scale *= 0.5) {
-        MatrixXd next = local_step_positions(UV, F, scale * D, opt.theta, side_mask, w, min_area);
+      const bool better = line_search(D, [&](const MatrixXd& next, double& fm, Stats& st) {
         local_after = face_log_ratio_mean(tl, next, Fl);
-        if (!(local_after < local_before)) continue;
-        const double fm = face_log_ratio_mean(target, next, F);
-        const Stats s = stats_of(next);
-        if (fm <= cur_face && s.mean <= cur.mean * 1.01) {
-          UV = std::move(next);
-          cur = s;
-          cur_face = fm;
-          better = true;
-        }
-      }
+        if (!(local_after < local_before)) return false;
+        fm = face_log_ratio_mean(target, next, F);
+        st = stats_of(next);
+        return fm <= cur_face && st.mean <= cur.mean * 1.01;
+      });
       if (!better) break;
       ++rep.polish_iterations;
       std::ostringstream msg;

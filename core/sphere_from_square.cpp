@@ -247,12 +247,13 @@ MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const Sphe
   // the sphere itself (fs741 pial: sphere element CV 0.0124 -> 0.0083, white 0.0020 -> 0.0012).
   // Coarse: a background of 64 cells per cube edge resolves sub-element errors, folds more
   // triangles and ends worse (pial: 0.013).
+  const VectorXd measure = face_areas(V, F);
   if (opt.sphere_flow.max_passes > 0) {
     report(progress, "sphere", -1, "coarse Moser pass on the sphere");
-    S = moser_sphere_flow(S, F, face_areas(V, F), opt.sphere_flow, &R.sphere_flow);
+    S = moser_sphere_flow(S, F, measure, opt.sphere_flow, &R.sphere_flow);
     if (sphere_flipped_faces(S, F) > 0) repair_sphere_flips(S, F);
   }
-  R.polish_face_error = polish_sphere_face_areas(S, F, face_areas(V, F), opt.polish_iterations);
+  R.polish_face_error = polish_sphere_face_areas(S, F, measure, opt.polish_iterations);
   open_thin_sphere_triangles(S, F);
   {
     std::ostringstream msg;
