@@ -143,6 +143,10 @@ void run(const SphereArgs& a) {
                                                    {"passes", q.sphere_flow.passes.size()},
                                                    {"density_min", q.sphere_flow.passes.empty() ? 0.0 : q.sphere_flow.passes[0].rho_min},
                                                    {"density_max", q.sphere_flow.passes.empty() ? 0.0 : q.sphere_flow.passes[0].rho_max}}},
+                           {"crushed_patches", {{"opened", q.crushed.patches},
+                                                {"faces", q.crushed.crushed_faces},
+                                                {"missing_area_fraction", q.crushed.missing_share},
+                                                {"put_back", q.crushed.patches_undone}}},
                            {"sphere_polish_face_ln_area_abs_mean", q.polish_face_error}};
     }
   }

@@ -461,6 +461,19 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
 
   // Flipped or degenerate: signed area below a tiny fraction of the mean triangle area.
   const double min_area = 1e-12 * w / std::max<Eigen::Index>(1, R.F.rows());
+  // The fallback weights, and uniform ones if those fold too.
+  auto solve_with_fallback = [&] {
+    R.weights = opt.fallback;
+    R.UV = harmonic_map(R.V, R.F, final_loop, buv, opt.fallback);
+    if (count_flipped(R.UV, R.F, min_area) > 0) {
+      R.weights = HarmonicWeights::Uniform;
+      R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::Uniform);
+    }
+  };
+  if (!opt.try_cotangent) {
+    solve_with_fallback();
+    return R;
+  }
   R.weights = HarmonicWeights::Cotangent;
   R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::Cotangent);
   if (opt.sliding_boundary) {
@@ -481,14 +494,7 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
     }
   }
   R.cotangent_flips = count_flipped(R.UV, R.F, min_area);
-  if (R.cotangent_flips > 0) {
-    R.weights = opt.fallback;
-    R.UV = harmonic_map(R.V, R.F, final_loop, buv, opt.fallback);
-    if (count_flipped(R.UV, R.F, min_area) > 0) {
-      R.weights = HarmonicWeights::Uniform;
-      R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::Uniform);
-    }
-  }
+  if (R.cotangent_flips > 0) solve_with_fallback();
   return R;
 }
 

@@ -68,6 +68,9 @@ struct RectangleBoundaryMap {
   // positive weights anyway (the stretch-energy start): it is symmetric, so it costs a Cholesky
   // solve instead of mean-value weights' LU (fs741 pial: 0.4 s instead of 2.5 s).
   HarmonicWeights fallback = HarmonicWeights::MeanValue;
+  // false: skip the cotangent map and solve with `fallback` directly (a caller that knows the
+  // cotangent map would fold, or re-solves anyway: native meshes always have obtuse triangles).
+  bool try_cotangent = true;
 };
 
 struct ConformalMapResult {

@@ -194,6 +194,7 @@ MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const Sphe
   SquareMapOptions so = opt.square;
   so.anatomical_anchor = false;
   so.orient_outward = false;
+  so.cotangent_start = false;
   so.width = 1.0;
   // A short square polish (the sphere polish below finishes it): fs741 pial, sphere element CV
   // 0.011 without, 0.0098 with 8 steps, 4 steps about as good.
@@ -242,18 +243,35 @@ MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const Sphe
   if (sphere_flipped_faces(S, F) > 0) repair_sphere_flips(S, F);
   unwind_sphere_stars(S, F);
   if (sphere_flipped_faces(S, F) > 0) repair_sphere_flips(S, F);
-  // 5. What the parts' maps leave at the scale of elements (their boundary layers along the seam,
-  // the cap's stretch energy stalled against its held seam) is removed by a coarse Moser pass on
-  // the sphere itself (fs741 pial: sphere element CV 0.0124 -> 0.0083, white 0.0020 -> 0.0012).
-  // Coarse: a background of 64 cells per cube edge resolves sub-element errors, folds more
-  // triangles and ends worse (pial: 0.013).
+  // 5. Patches the parts' maps crushed (fs741 pial: 598 faces below e^-2 of their area, missing
+  // 0.1 % of it, most of it in one pocket of the medial wall) are opened by the equal-area radial
+  // rearrangement of core/crushed_patches.h: no grid resolves them.
   const VectorXd measure = face_areas(V, F);
-  if (opt.sphere_flow.max_passes > 0) {
-    report(progress, "sphere", -1, "coarse Moser pass on the sphere");
-    S = moser_sphere_flow(S, F, measure, opt.sphere_flow, &R.sphere_flow);
-    if (sphere_flipped_faces(S, F) > 0) repair_sphere_flips(S, F);
+  inflate_crushed_patches(S, F, measure, opt.crushed, &R.crushed);
+  {
+    std::ostringstream msg;
+    msg << "crushed patches opened: " << R.crushed.patches << " (" << R.crushed.crushed_faces << " faces missing "
+        << 100 * R.crushed.missing_share << " % of the area), " << R.crushed.patches_undone << " put back";
+    report(progress, "sphere", -1, msg.str());
   }
-  R.polish_face_error = polish_sphere_face_areas(S, F, measure, opt.polish_iterations);
+  // 6. What the parts' maps leave at the scale of elements (their boundary layers along the seam,
+  // the cap's stretch energy stalled against its held seam) is removed by a coarse Moser pass on
+  // the sphere itself (fs741 pial: sphere element CV 0.0124 -> 0.0083, white 0.0020 -> 0.0012);
+  // 64 cells per cube edge resolve sub-element errors, fold more triangles and end worse (pial:
+  // 0.013). Then the per-face polish (face scale), in opt.polish_rounds rounds.
+  R.sphere_flow.passes.clear();
+  for (int round = 0; round < opt.polish_rounds; ++round) {
+    if (opt.sphere_flow.max_passes > 0) {
+      report(progress, "sphere", -1, "coarse Moser pass on the sphere (round " + std::to_string(round + 1) + ")");
+      SphereFlowReport pass;
+      S = moser_sphere_flow(S, F, measure, opt.sphere_flow, &pass);
+      R.sphere_flow.grid_cells = pass.grid_cells;
+      R.sphere_flow.passes.insert(R.sphere_flow.passes.end(), pass.passes.begin(), pass.passes.end());
+      if (sphere_flipped_faces(S, F) > 0) repair_sphere_flips(S, F);
+    }
+    const int budget = round == 0 ? opt.polish_iterations : std::max(1, opt.polish_iterations / 2);
+    R.polish_face_error = polish_sphere_face_areas(S, F, measure, budget);
+  }
   open_thin_sphere_triangles(S, F);
   {
     std::ostringstream msg;

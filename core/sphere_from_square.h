@@ -17,6 +17,7 @@
 // The seam is the circle z = 1 − 2 a_B on both sides (a_B: B's share of the area). The joined
 // map is finished on the sphere: flips repaired, one coarse Moser pass (core/sphere_flow.h) for
 // the parts' boundary layers along the seam, and the per-face polish.
+#include "core/crushed_patches.h"
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "core/sphere_flow.h"
@@ -45,8 +46,14 @@ struct SphereFromSquareOptions {
   double cap_fraction = 0.1;   // share of the surface area in the cap C
   SquareMapOptions square;     // for B (orientation rules are switched off: the input is outward)
   StretchEnergyOptions cap = cap_stretch_options();  // for C (the boundary is always held)
+  CrushedPatchOptions crushed;  // patches the parts' maps crushed, opened on the joined sphere
   SphereFlowOptions sphere_flow = coarse_sphere_flow_options();  // then on the whole sphere
-  int polish_iterations = 8;   // per-face polish on the sphere (core/sphere_flow.h)
+  // Rounds of one coarse Moser pass and the per-face polish on the sphere (core/sphere_flow.h):
+  // the first polish takes up to polish_iterations steps, the later ones half as many. More
+  // rounds are not reliably better: the later passes crush some of the faces the polish opened
+  // (fs741 pial: CV 0.0049 with 1 round, 0.0031-0.0057 with 2, 0.0088 with 3, by solver bits).
+  int polish_rounds = 1;
+  int polish_iterations = 8;
 };
 
 struct SphereFromSquareReport {
@@ -56,6 +63,7 @@ struct SphereFromSquareReport {
   FlowReport square_flow;        // B's square map: its flow and stretch-energy start
   StretchEnergyReport square_stretch;
   StretchEnergyReport cap;       // C's stretch-energy iterations
+  CrushedPatchReport crushed;    // the radial rearrangement of crushed patches
   SphereFlowReport sphere_flow;  // the coarse pass on the joined sphere
   double polish_face_error = 0;  // per-face mean |ln area ratio| after the sphere polish
 };

@@ -82,6 +82,7 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   b.width = opt.width;
   b.sliding_boundary = opt.sliding_initial_boundary;
   if (opt.stretch_start) b.fallback = HarmonicWeights::ClampedCotangent;
+  b.try_cotangent = !opt.stretch_start || opt.cotangent_start;
   if (opt.anatomical_anchor) {
     double best = -std::numeric_limits<double>::infinity();
     for (Eigen::Index f = 0; f < F.rows(); ++f)

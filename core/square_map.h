@@ -39,6 +39,10 @@ struct SquareMapOptions {
   // Stretch-energy iterations between the conformal map and the flow (core/stretch_energy.h):
   // a roughly authalic start, so the flow only corrects what is left.
   bool stretch_start = true;
+  // With the stretch-energy start: try the cotangent conformal map first (it is kept if it folds
+  // nothing), or go straight to the clamped cotangent weights the stretch energy uses (one
+  // factorisation less; on a native mesh the cotangent map always folds, fs741: 319 triangles).
+  bool cotangent_start = true;
   StretchEnergyOptions stretch;
 };
 
