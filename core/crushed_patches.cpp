@@ -160,6 +160,7 @@ void inflate_crushed_patches(MatrixXd& S, const MatrixXi& F, const VectorXd& fac
     double missing_at_start = 0;
     for (int f : patch) missing_at_start += target[f] - start[f];
     if (missing_at_start < opt.min_missing_share) break;  // the rest are smaller
+    if (static_cast<int>(patch.size()) < opt.min_faces) continue;
     // Shares now: an earlier window may have opened this patch already.
     const VectorXd share = chord_area_shares(S, F);
     double missing = 0;
