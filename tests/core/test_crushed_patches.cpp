@@ -84,14 +84,15 @@ TEST(CrushedPatches, NothingCrushedNothingMoves) {
 
 TEST(SpherePolish, LogResidualOpensCrushedFacesInsteadOfTradingThem) {
   // The polish's residual is √T ln(a/T): a face at 1 % of its area is far from its target in
-  // that measure, so the steps open the squeezed cap rather than leave it for the inflated ring.
+  // that measure, and one Gauss-Newton step in it opens the squeezed cap. With the linear
+  // residual (a − T)/√T, bounded by √T, one step left 40 % of the missing area (measured).
   const TriMesh m = icosphere(4);
   const Eigen::Vector3d c = Eigen::Vector3d(-0.2, 0.7, 0.4).normalized();
   MatrixXd S = crushed_map(m.V, c);
   const VectorXd measure = face_areas(m.V, m.F);
   const double before = missing_share(S, m.F, measure);
   ASSERT_GT(before, 0.002);
-  polish_sphere_face_areas(S, m.F, measure, 8);
+  polish_sphere_face_areas(S, m.F, measure, 1);
   EXPECT_EQ(sphere_flipped_faces(S, m.F), 0);
-  EXPECT_LT(missing_share(S, m.F, measure), 0.3 * before);
+  EXPECT_LT(missing_share(S, m.F, measure), 0.1 * before);
 }
