@@ -48,12 +48,7 @@ struct SphereFromSquareOptions {
   StretchEnergyOptions cap = cap_stretch_options();  // for C (the boundary is always held)
   CrushedPatchOptions crushed;  // patches the parts' maps crushed, opened on the joined sphere
   SphereFlowOptions sphere_flow = coarse_sphere_flow_options();  // then on the whole sphere
-  // Rounds of one coarse Moser pass and the per-face polish on the sphere (core/sphere_flow.h):
-  // the first polish takes up to polish_iterations steps, the later ones half as many. More
-  // rounds are not reliably better: the later passes crush some of the faces the polish opened
-  // (fs741 pial: CV 0.0049 with 1 round, 0.0031-0.0057 with 2, 0.0088 with 3, by solver bits).
-  int polish_rounds = 1;
-  int polish_iterations = 8;
+  int polish_iterations = 8;   // per-face polish on the sphere (core/sphere_flow.h)
 };
 
 struct SphereFromSquareReport {
