@@ -441,6 +441,10 @@ void write_element_table(const std::string& csv_path, const ElementTable& table)
 }
 
 ElementTable read_element_table(const std::string& csv_path, bool values_only) {
+  const auto ends_with = [&](const std::string& e) { return csv_path.size() >= e.size() && csv_path.compare(csv_path.size() - e.size(), e.size(), e) == 0; };
+  if (!ends_with(".csv"))
+    throw InputError(csv_path + ": an element table is a .csv file (with a .json sidecar beside it)" +
+                     std::string(ends_with(".json") ? "; this looks like a JSON file, e.g. a normative reference or a sidecar: give the table's .csv" : ""));
   const std::string sidecar = element_sidecar_path(csv_path);
   ElementTable t;
   {
@@ -458,7 +462,9 @@ ElementTable read_element_table(const std::string& csv_path, bool values_only) {
         throw InputError(sidecar + ": element-table version " + std::to_string(version) +
                          " is not supported by this authalic (version 1); update authalic");
       const ElementDomain domain = parse_element_domain(j.at("domain").get<std::string>(), sidecar + ": domain");
-      t.grid = element_grid(domain, j.at("k").get<int>());
+      const int k = j.at("k").get<int>();
+      if (k < 1 || k > 4096) throw InputError(sidecar + ": k = " + std::to_string(k) + " is outside 1..4096; the table's sidecar is corrupt");
+      t.grid = element_grid(domain, k);
       if (j.at("rows").get<int>() != t.grid.rows || j.at("cols").get<int>() != t.grid.cols)
         throw InputError(sidecar + ": rows/cols do not match domain " + to_string(domain) + " at k = " + std::to_string(t.grid.k));
       for (const auto& h : j.at("hemispheres")) t.blocks.push_back({h.get<std::string>(), {}});
@@ -526,9 +532,7 @@ ElementTable read_element_table(const std::string& csv_path, bool values_only) {
 
 namespace authalic::analysis {
 
-ElementOutputPaths write_element_outputs(const std::string& prefix, const ElementTable& table, const ElementResult& result,
-                                         const MatrixXd& V_scanner, const MatrixXi& F, bool left) {
-  if (table.blocks.size() != 1) throw std::logic_error("write_element_outputs: expects a one-block table");
+ElementOutputPaths element_output_paths(const std::string& prefix) {
   ElementOutputPaths p;
   p.csv = prefix + ".csv";
   p.sidecar = element_sidecar_path(p.csv);
@@ -537,6 +541,15 @@ ElementOutputPaths write_element_outputs(const std::string& prefix, const Elemen
   p.png = prefix + ".png";
   p.png_3d = prefix + "_3d.png";
   p.label = prefix + ".label.gii";
+  return p;
+}
+
+std::vector<std::string> ElementOutputPaths::all() const { return {csv, sidecar, nifti, area_nifti, png, png_3d, label}; }
+
+ElementOutputPaths write_element_outputs(const std::string& prefix, const ElementTable& table, const ElementResult& result,
+                                         const MatrixXd& V_scanner, const MatrixXi& F, bool left) {
+  if (table.blocks.size() != 1) throw std::logic_error("write_element_outputs: expects a one-block table");
+  const ElementOutputPaths p = element_output_paths(prefix);
   const ElementGrid& g = table.grid;
   const ElementBlock& block = table.blocks[0];
   const std::string units = table.units.empty() ? std::string("input units") : table.units;

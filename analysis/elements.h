@@ -128,7 +128,10 @@ ElementTable read_element_table(const std::string& csv_path, bool values_only = 
 
 struct ElementOutputPaths {
   std::string csv, sidecar, nifti, area_nifti, png, png_3d, label;
+  std::vector<std::string> all() const;
 };
+// The paths write_element_outputs writes for PREFIX (listed below).
+ElementOutputPaths element_output_paths(const std::string& prefix);
 // Writes, for a one-block table and its result on a surface (V_scanner: RAS mm, F: its faces):
 //   PREFIX.csv + PREFIX.json   the element table (write_element_table)
 //   PREFIX.nii.gz              cols x rows x 1 float image of element values (voxel (col, row));

@@ -85,6 +85,12 @@ std::vector<double> read_array(const nlohmann::json& j, const char* key, std::si
 
 }  // namespace
 
+std::string format_value(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
 double NormativeReference::sd(int i) const {
   const double nn = n[static_cast<std::size_t>(i)];
   return nn >= 2 ? std::sqrt(std::max(0.0, m2[static_cast<std::size_t>(i)]) / (nn - 1)) : kNaN;
@@ -127,6 +133,10 @@ void add_subject(NormativeReference& r, const ElementTable& table, const std::st
     for (int e = 0; e < ne; ++e) {
       const double y = table.blocks[b].elements[static_cast<std::size_t>(e)].value;
       if (!std::isfinite(y)) continue;
+      // Squares of larger values overflow M2 to infinity, which no reference file can hold.
+      if (std::abs(y) > kMaxReferenceValue)
+        throw InputError(source + ": element " + std::to_string(e) + " (" + table.blocks[b].hemisphere + ") has value " +
+                         format_value(y) + ", beyond +-1e15: not a plausible PET value; check how the table was made");
       const std::size_t i = b * static_cast<std::size_t>(ne) + static_cast<std::size_t>(e);
       // Welford: the running mean and M2; with an age, the running co-moment (uses the old age
       // deviation and the new value deviation, which makes the update exact).
@@ -247,6 +257,7 @@ std::string reference_to_json(const NormativeReference& r) {
   j["units"] = r.units;
   j["num_subjects"] = r.subjects.size();
   j["age_model"] = r.age_model;
+  j["partial"] = r.partial;
   j["subjects"] = nlohmann::json::array();
   for (const auto& s : r.subjects) j["subjects"].push_back({{"id", s.id}, {"age", number_or_null(s.age)}, {"table", s.table}});
   nlohmann::json e;
@@ -275,7 +286,9 @@ NormativeReference reference_from_json(const std::string& text, const std::strin
     if (version != kNormativeFormatVersion)
       throw InputError(path + ": reference format version " + std::to_string(version) + " is not supported (this authalic reads version " +
                        std::to_string(kNormativeFormatVersion) + "); rebuild the reference with this version");
-    r.grid = element_grid(parse_element_domain(j.at("domain").get<std::string>(), path + ": domain"), j.at("k").get<int>());
+    const int k = j.at("k").get<int>();
+    if (k < 1 || k > 4096) throw InputError(path + ": k = " + std::to_string(k) + " is outside 1..4096; the reference file is corrupt");
+    r.grid = element_grid(parse_element_domain(j.at("domain").get<std::string>(), path + ": domain"), k);
     if (j.at("rows").get<int>() != r.grid.rows || j.at("cols").get<int>() != r.grid.cols)
       throw InputError(path + ": rows/cols do not match the domain and K");
     r.hemispheres = j.at("hemispheres").get<std::vector<std::string>>();
@@ -293,6 +306,7 @@ NormativeReference reference_from_json(const std::string& text, const std::strin
     if (j.at("num_subjects").get<std::size_t>() != r.subjects.size())
       throw InputError(path + ": num_subjects does not match the subject list");
     r.age_model = j.at("age_model").get<bool>();
+    r.partial = j.value("partial", false);
     const auto& e = j.at("elements");
     const std::size_t size = static_cast<std::size_t>(r.num_values());
     r.n = read_array(e, "n", size, path);
@@ -322,6 +336,24 @@ NormativeReference read_reference(const std::string& path) {
   std::string text;
   if (!read_text_file(path, text)) throw InputError(path + ": cannot read the normative reference");
   return reference_from_json(text, path);
+}
+
+int usable_elements(const NormativeReference& r, int min_subjects) {
+  int usable = 0;
+  for (int i = 0; i < r.num_values(); ++i)
+    if (r.n[static_cast<std::size_t>(i)] >= min_subjects && r.sd(i) > 0 && std::isfinite(r.sd(i))) ++usable;
+  return usable;
+}
+
+void check_reference_usable(const NormativeReference& r, const std::string& what) {
+  const int controls = static_cast<int>(r.subjects.size());
+  if (controls < kMinControls)
+    throw InputError(what + ": " + std::to_string(controls) + " control(s); a normative reference needs at least " +
+                     std::to_string(kMinControls) + " (fewer give no normal range to compare with): add control tables");
+  if (usable_elements(r, kMinControls) == 0)
+    throw InputError(what + ": no element has " + std::to_string(kMinControls) +
+                     " or more controls with values that vary (SD > 0); every z-score would be undefined: check the "
+                     "control tables (are they copies of one table, or all empty?)");
 }
 
 // ---- comparison --------------------------------------------------------------------------
@@ -418,6 +450,10 @@ void rescale_to_reference(Comparison& out, const std::vector<double>& value, dou
 Comparison compare_to_reference(const NormativeReference& ref, const ElementTable& patient, const CompareOptions& options) {
   check_compatible(ref, patient, patient.subject_id.empty() ? std::string("patient table") : "patient " + patient.subject_id);
   if (!(options.threshold > 0)) throw InputError("--threshold: must be > 0 (|z| flagged as abnormal)");
+  if (ref.partial)
+    throw InputError(options.reference_name + ": is a partial reference (" + std::to_string(ref.subjects.size()) +
+                     " control(s), from `normative build --partial`) meant for merging; merge it with the others "
+                     "(authalic normative merge) before comparing");
   Comparison out;
   out.threshold = options.threshold;
   out.predictive = options.predictive;
@@ -473,6 +509,12 @@ Comparison compare_to_reference(const NormativeReference& ref, const ElementTabl
     }
   }
   out.num_without_z = static_cast<int>(size) - out.num_compared;
+  // "0 elements compared, 0 clusters" would read as a normal result: it is no result at all.
+  if (out.num_compared == 0)
+    throw InputError(options.reference_name + ": no element could be compared (" + std::to_string(usable_elements(ref, min_n)) +
+                     " of " + std::to_string(size) + " elements have " + std::to_string(min_n) +
+                     "+ controls with SD > 0, and the patient has no finite value in those); this is not a normal "
+                     "result: use a reference built from at least " + std::to_string(kMinControls) + " controls");
 
   // Clusters per block.
   for (std::size_t b = 0; b < ref.hemispheres.size(); ++b) {
@@ -581,15 +623,32 @@ std::string comparison_summary_json(const NormativeReference& ref, const std::st
   return j.dump(2) + "\n";
 }
 
-ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const NormativeReference& ref,
-                                               const std::string& reference_path, const ElementTable& patient,
-                                               const std::string& patient_path, const Comparison& cmp,
-                                               const std::vector<VectorXi>& vertex_elements) {
+ComparisonOutputPaths comparison_output_paths(const std::string& prefix, const std::vector<std::string>& hemispheres,
+                                              const std::vector<bool>& with_vertices) {
   ComparisonOutputPaths p;
   p.z_nifti = prefix + "_z.nii.gz";
   p.z_png = prefix + "_z.png";
   p.abnormal_csv = prefix + "_abnormal.csv";
   p.summary_json = prefix + ".json";
+  const std::size_t nb = hemispheres.size();
+  for (std::size_t b = 0; b < nb && b < with_vertices.size(); ++b)
+    if (with_vertices[b]) p.z_func.push_back(nb == 1 ? prefix + "_z.func.gii" : prefix + "_" + hemispheres[b] + "_z.func.gii");
+  return p;
+}
+
+std::vector<std::string> ComparisonOutputPaths::all() const {
+  std::vector<std::string> v = {z_nifti, z_png, abnormal_csv, summary_json};
+  v.insert(v.end(), z_func.begin(), z_func.end());
+  return v;
+}
+
+ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const NormativeReference& ref,
+                                               const std::string& reference_path, const ElementTable& patient,
+                                               const std::string& patient_path, const Comparison& cmp,
+                                               const std::vector<VectorXi>& vertex_elements) {
+  std::vector<bool> with_vertices;
+  for (std::size_t b = 0; b < ref.hemispheres.size(); ++b) with_vertices.push_back(b < vertex_elements.size() && vertex_elements[b].size() > 0);
+  const ComparisonOutputPaths p = comparison_output_paths(prefix, ref.hemispheres, with_vertices);
   const ElementGrid& g = ref.grid;
   const int ne = g.num_elements();
   const int nb = static_cast<int>(ref.hemispheres.size());
@@ -616,6 +675,7 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
   }
   io::write_png(p.z_png, nb == 1 ? panels[0] : compose_horizontal(panels, 16, captions));
 
+  std::size_t z_file = 0;
   for (int b = 0; b < nb && b < static_cast<int>(vertex_elements.size()); ++b) {
     const VectorXi& ve = vertex_elements[static_cast<std::size_t>(b)];
     if (ve.size() == 0) continue;
@@ -623,7 +683,7 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
     for (Eigen::Index v = 0; v < ve.size(); ++v)
       if (ve(v) >= 0 && ve(v) < ne) zv(v) = cmp.z[static_cast<std::size_t>(b) * static_cast<std::size_t>(ne) + static_cast<std::size_t>(ve(v))];
     const std::string& hemi = ref.hemispheres[static_cast<std::size_t>(b)];
-    const std::string path = nb == 1 ? prefix + "_z.func.gii" : prefix + "_" + hemi + "_z.func.gii";
+    const std::string& path = p.z_func[z_file++];
     io::FuncWriteOptions fo;
     fo.column_names = {"z"};
     if (hemi == "left") fo.anatomical_structure = "CortexLeft";
@@ -633,7 +693,6 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
                    {"normalisation", ref.normalisation},
                    {"software", software_string()}};
     io::write_per_vertex(path, zv, fo);
-    p.z_func.push_back(path);
   }
 
   std::string csv = "hemisphere,id,row,col,value,expected,sd,z,direction,cluster,area_mm2,centroid_x_mm,centroid_y_mm,centroid_z_mm\n";

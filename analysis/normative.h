@@ -50,6 +50,13 @@ struct NormativeSubject {
   std::string table;  // the element table it came from
 };
 
+// A reference needs this many controls (normative build and merge refuse fewer): with fewer the
+// SD, and so every z-score, is not a normal range.
+inline constexpr int kMinControls = 3;
+// Element values beyond this magnitude are refused when building a reference (their squares
+// overflow the sums of squares).
+inline constexpr double kMaxReferenceValue = 1e15;
+
 struct NormativeReference {
   ElementGrid grid;
   std::vector<std::string> hemispheres;  // blocks, in order
@@ -58,6 +65,7 @@ struct NormativeReference {
   std::string software;                  // of the program that wrote it
   std::vector<NormativeSubject> subjects;
   bool age_model = false;                // age statistics kept (every subject has an age)
+  bool partial = false;                  // built for merging (normative build --partial): not for comparing
   // Per element (hemispheres.size() * grid.num_elements()):
   std::vector<double> n, mean, m2;       // n stored as double (exact below 2^53)
   std::vector<double> age_mean, age_m2, comoment;  // empty when !age_model
@@ -87,10 +95,16 @@ std::string reference_to_json(const NormativeReference& reference);
 NormativeReference reference_from_json(const std::string& text, const std::string& path);
 void write_reference(const std::string& path, const NormativeReference& reference);  // atomic
 NormativeReference read_reference(const std::string& path);
+// Elements with at least min_subjects controls and a finite SD > 0.
+int usable_elements(const NormativeReference& reference, int min_subjects);
+// Throws InputError("<what>: ...") for a reference a comparison cannot use: fewer than kMinControls
+// controls, or no usable element. `normative build` and `merge` call it before writing.
+void check_reference_usable(const NormativeReference& reference, const std::string& what);
 
 // ---- comparison of a patient ------------------------------------------------------------
 
 struct CompareOptions {
+  std::string reference_name = "the normative reference";  // the file, for messages
   double threshold = 2.0;        // |z| at or beyond which an element is abnormal
   bool use_age = true;           // use the age model when the reference has one and the age is known
   double age = std::numeric_limits<double>::quiet_NaN();  // patient's age (years); NaN = from the table
@@ -156,7 +170,12 @@ Comparison compare_to_reference(const NormativeReference& reference, const Eleme
 struct ComparisonOutputPaths {
   std::string z_nifti, z_png, abnormal_csv, summary_json;
   std::vector<std::string> z_func;  // one per block given vertex elements
+  std::vector<std::string> all() const;
 };
+// The paths write_comparison_outputs writes for PREFIX; with_vertices[b]: block b gets a
+// per-vertex z file (its vertex_elements entry is non-empty).
+ComparisonOutputPaths comparison_output_paths(const std::string& prefix, const std::vector<std::string>& hemispheres,
+                                              const std::vector<bool>& with_vertices);
 // Writes:
 //   PREFIX_z.nii.gz        cols x rows x blocks float image of z (NaN where no z)
 //   PREFIX_z.png           the z elements per block, diverging colour map over [-5, 5], colour bar

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <exception>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -28,7 +29,9 @@
 #include "core/version.h"
 #include "io/atomic_file.h"
 #include "io/checksum.h"
+#include "io/file_roles.h"
 #include "io/image_io.h"
+#include "io/lock_file.h"
 #include "io/registration.h"
 #include "io/surface_io.h"
 #include "io/volume_io.h"
@@ -96,6 +99,34 @@ void check_id(const std::string& id) {
   for (char c : id)
     if (!std::isalnum(static_cast<unsigned char>(c)))
       throw InputError("--id '" + id + "': BIDS labels are letters and digits only; e.g. 'patient01'");
+}
+
+// Refuses inputs that read fine but cannot be the anatomy they are named as (issue 17): white and
+// pial swapped (elements would sample the wrong side of the ribbon: the pial surface encloses the
+// white one, so its area is the larger, about 1.2-1.5x on FreeSurfer subjects) and left and right
+// swapped (the left hemisphere lies at smaller RAS x than the right one).
+void check_anatomy(const Hemisphere (&hemis)[2], const SubjectInputs& in) {
+  const std::string white_path[2] = {in.lh_white, in.rh_white}, pial_path[2] = {in.lh_pial, in.rh_pial};
+  const char* white_flag[2] = {"--lh-white", "--rh-white"};
+  for (int k = 0; k < 2; ++k) {
+    const double white = face_areas(hemis[k].white.mesh.V, hemis[k].white.mesh.F).sum();
+    const double pial = face_areas(hemis[k].pial.mesh.V, hemis[k].pial.mesh.F).sum();
+    if (!(pial > white)) {
+      std::ostringstream s;
+      s << std::fixed << std::setprecision(0) << pial_path[k] << ": the " << hemis[k].name << " pial surface's area (" << pial
+        << " mm^2) is not larger than the white surface's (" << white << " mm^2, " << white_path[k]
+        << "); white and pial look swapped: give the white surface as " << white_flag[k];
+      throw InputError(s.str());
+    }
+  }
+  const double lx = hemis[0].white.mesh.V.col(0).mean(), rx = hemis[1].white.mesh.V.col(0).mean();
+  if (!(lx < rx)) {
+    std::ostringstream s;
+    s << std::fixed << std::setprecision(1) << in.lh_white << ": the left hemisphere lies at larger RAS x (mean " << lx
+      << " mm) than the right one (" << in.rh_white << ", mean " << rx
+      << " mm); left and right look swapped: give ?h = lh files as --lh-*";
+    throw InputError(s.str());
+  }
 }
 
 // Surface files name the cortex by their triangles; labels and masks by their vertices.
@@ -229,12 +260,56 @@ json input_checksums(const SubjectInputs& in) {
   return j;
 }
 
+// The output folder for the run's lifetime: created if missing, and removed again (only if still
+// empty) when the run fails, so that bad input leaves nothing behind.
+class OutFolder {
+ public:
+  explicit OutFolder(const std::string& path) : path_(path) {
+    std::error_code ec;
+    if (fs::exists(path_, ec)) {
+      if (!fs::is_directory(path_, ec)) throw InputError(path_ + ": --out exists and is not a folder; give a folder");
+      return;
+    }
+    fs::create_directories(path_, ec);
+    if (ec) throw InputError(path_ + ": cannot create the output folder (" + ec.message() + ")");
+    created_ = true;
+  }
+  ~OutFolder() {
+    std::error_code ec;
+    if (created_ && std::uncaught_exceptions() > 0 && fs::is_empty(path_, ec)) fs::remove(path_, ec);
+  }
+  OutFolder(const OutFolder&) = delete;
+  OutFolder& operator=(const OutFolder&) = delete;
+
+ private:
+  std::string path_;
+  bool created_ = false;
+};
+
+// Staging (.sub-<id>.partial-<pid>) and swap (.sub-<id>.old-<pid>) folders left by runs that were
+// killed: called under the subject's lock, so no live run owns them.
+void remove_dead_staging(const std::string& out_dir, const std::string& id) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(out_dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    for (const std::string kind : {".partial-", ".old-"})
+      if (name.rfind(".sub-" + id + kind, 0) == 0) fs::remove_all(entry.path(), ec);
+  }
+}
+
 }  // namespace
 
 RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const ProgressFn& progress) {
   check_id(in.id);
   if (options.out_dir.empty()) throw InputError("--out: no output folder given");
   const fs::path final_dir = fs::path(options.out_dir) / ("sub-" + in.id);
+  io::check_inputs_outside({in.lh_white, in.lh_pial, in.rh_white, in.rh_pial, in.lh_cortex, in.rh_cortex, in.pet, in.t1, in.normative},
+                           final_dir.string(), options.force ? "--force would replace" : "is the subject's output folder");
+  const OutFolder out_folder(options.out_dir);
+  // The whole run holds the subject's lock: a second run on the same OUT/sub-<id> is refused
+  // instead of racing this one to the final rename.
+  const io::LockFile lock((fs::path(options.out_dir) / (".sub-" + in.id + ".lock")).string(), final_dir.string());
+  remove_dead_staging(options.out_dir, in.id);
   if (fs::exists(final_dir) && !options.force)
     throw InputError(final_dir.string() + ": output folder exists; pass --force to replace it or choose another --out");
 
@@ -254,7 +329,11 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   const std::string right_note = load_hemisphere(hemis[1], in.rh_white, in.rh_pial, in.rh_cortex);
   for (const std::string& note : {left_note, right_note})
     if (!note.empty()) log.note(note);
-  const io::Volume pet = io::read_volume(in.pet);
+  check_anatomy(hemis, in);
+  io::VolumeReadOptions pet_options;
+  pet_options.frame = options.pet_frame;
+  pet_options.sum_frames = options.pet_sum_frames;
+  const io::Volume pet = io::read_volume(in.pet, pet_options);
   NormativeReference reference;
   const bool compare = !in.normative.empty();
   if (compare) reference = read_reference(in.normative);
@@ -328,7 +407,11 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     F << hemis[0].cortex_faces, (hemis[1].cortex_faces.array() + nl).matrix();
     VectorXd values(V.rows());
     values << hemis[0].pet, hemis[1].pet;
-    norm = global_cortical_mean(values, V, F);
+    try {
+      norm = global_cortical_mean(values, V, F);
+    } catch (const InputError& e) {
+      throw InputError(in.pet + ": " + e.what());
+    }
   } else if (mask) {
     norm = reference_region_mean(pet, *mask);
   }
@@ -360,6 +443,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   if (compare) {
     log.begin("normative comparison");
     CompareOptions co;
+    co.reference_name = in.normative;
     co.threshold = options.z_threshold;
     co.rescale = options.rescale;
     cmp = compare_to_reference(reference, table, co);

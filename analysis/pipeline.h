@@ -40,6 +40,8 @@ struct RunOptions {
   bool rescale = true;          // CompareOptions::rescale
   bool report = true;           // write report.html
   bool rectangle = true;        // also the 1:2 whole-brain rectangle map
+  int pet_frame = -1;           // 4D PET: the frame to sample (0-based); -1: none chosen
+  bool pet_sum_frames = false;  // 4D PET: sum all frames
 };
 
 struct RunSummary {

@@ -61,10 +61,17 @@ struct SegmentStat {
   }
 };
 
+constexpr double kMinStepMm = 0.05;
+
 double default_step(const io::Volume& volume, const SamplingOptions& options) {
   const double half_voxel = 0.5 * volume.voxel_size().minCoeff();
   if (!(half_voxel > 0) || !std::isfinite(half_voxel))
     throw InputError(volume_name(volume) + ": voxel size is zero or not finite; the file's affine is broken");
+  // The step is bounded below so that the sample count stays an int and the run stays short
+  // (a 10 mm ribbon at 0.05 mm is 200 samples; 1e-9 mm overflowed the count).
+  if (!std::isfinite(options.step_mm) || options.step_mm < 0 || (options.step_mm > 0 && options.step_mm < kMinStepMm))
+    throw InputError("--step " + format_number(options.step_mm) + " mm: give a step of at least " + format_number(kMinStepMm) +
+                     " mm (or none: half the smallest voxel)");
   if (options.step_mm > 0) return std::min(options.step_mm, half_voxel);
   return half_voxel;
 }
@@ -348,18 +355,26 @@ Normalisation global_cortical_mean(const VectorXd& values, const MatrixXd& V, co
     throw InputError("values: " + std::to_string(values.size()) + " values for a surface of " + std::to_string(V.rows()) +
                      " vertices");
   const VectorXd area = barycentric_vertex_areas(V, F);
-  double sum = 0, weight = 0;
+  double sum = 0, sum_abs = 0, weight = 0;
   int count = 0;
   for (Eigen::Index v = 0; v < values.size(); ++v) {
     if (!(area(v) > 0) || !std::isfinite(values(v))) continue;
     sum += area(v) * values(v);
+    sum_abs += area(v) * std::abs(values(v));
     weight += area(v);
     ++count;
   }
   if (!(weight > 0) || !(sum / weight > 0))
-    throw ProcessingError("global normalisation: the cortical mean of the sampled values is " +
-                          (weight > 0 ? format_number(sum / weight) : std::string("undefined")) +
-                          " (not positive); use --normalize none or a reference-region mask");
+    throw InputError("global normalisation: the cortical mean of the sampled values is " +
+                     (weight > 0 ? format_number(sum / weight) : std::string("undefined")) +
+                     " (not positive); use --normalize none or a reference-region mask");
+  // Uptake is positive almost everywhere, so the mean is close to the mean magnitude; noise
+  // around zero (an empty or misregistered PET) has a tiny mean and would give ratios of +-50.
+  if (sum < 0.5 * sum_abs)
+    throw InputError("global normalisation: the cortical mean " + format_number(sum / weight) + " is small against the mean magnitude " +
+                     format_number(sum_abs / weight) +
+                     " of the sampled values: the PET on the cortex is mostly noise around zero (an empty PET, or one "
+                     "not registered to the surfaces?); check it, or use --normalize none");
   Normalisation n;
   n.kind = NormalisationKind::GlobalMean;
   n.reference_value = sum / weight;

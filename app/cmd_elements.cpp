@@ -16,6 +16,7 @@
 #include "core/version.h"
 #include "io/surface_formats.h"
 #include "io/surface_io.h"
+#include "io/file_roles.h"
 
 namespace authalic::app {
 namespace {
@@ -90,6 +91,7 @@ MatrixXi faces_in_map_region(const MatrixXi& F, const MatrixXi& map_F, int num_v
 
 int run_elements(const ElementsArgs& a) {
   const auto start = std::chrono::steady_clock::now();
+  io::check_file_roles({a.surface, a.map, a.values}, analysis::element_output_paths(a.prefix).all());
   const analysis::ElementDomain domain = analysis::parse_element_domain(a.domain);
   const analysis::ElementGrid grid = analysis::element_grid(domain, a.k);
   const io::Surface surface = io::read_surface(a.surface);
@@ -182,13 +184,13 @@ const bool registered = register_command({45, [](CLI::App& parent) {
   sub->add_option("MAP", a->map, "Its authalic map (.surf.gii): x,y in the domain (or scaled), or a sphere")->required();
   sub->add_option("VALUES", a->values, "Per-vertex values, e.g. from `authalic sample` (.func.gii)")->required();
   sub->add_option("OUT_PREFIX", a->prefix, "Output prefix")->required();
-  sub->add_option("--k", a->k, "Grid resolution K")->check(CLI::Range(1, 1024))->capture_default_str();
+  sub->add_option("--k", a->k, "Grid resolution K")->check(in_range(1, 1024))->capture_default_str();
   sub->add_option("--domain", a->domain, "square, rectangle or sphere")
       ->check(CLI::IsMember({"square", "rectangle", "sphere"}))
       ->capture_default_str();
   sub->add_option("--hemisphere", a->hemisphere, "left, right or both (default: from the surface's metadata or name)");
   sub->add_option("--subject", a->subject, "Subject id recorded in the table (used by `authalic normative`)");
-  sub->add_option("--age", a->age, "Subject's age in years, recorded for the normative age model");
+  sub->add_option("--age", a->age, "Subject's age in years, recorded for the normative age model")->check(age_years());
   sub->add_option("--normalisation", a->normalisation,
                   "Intensity normalisation of VALUES (default: from its metadata as written by `authalic sample`)");
   sub->add_option("--units", a->units, "Units of VALUES (default: from its metadata)");

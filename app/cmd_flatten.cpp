@@ -20,6 +20,7 @@
 #include "core/sulcal_depth.h"
 #include "io/image_io.h"
 #include "io/surface_io.h"
+#include "io/file_roles.h"
 
 namespace authalic::app {
 namespace {
@@ -152,6 +153,8 @@ void run(const FlattenArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const int given = !a.faces_from.empty() + !a.label.empty() + !a.patch.empty();
   if (given > 1) throw InputError("flatten: give at most one of --faces-from, --label, --patch");
+  io::check_file_roles({a.surface, a.faces_from, a.label, a.patch, a.density, a.shading},
+                       {a.out, a.uv, a.initial, a.fs_patch, a.metrics, a.png, a.histogram});
   const io::Surface surface = io::read_surface(a.surface);
   const TriMesh& mesh = surface.mesh;
   std::string region_source;
@@ -357,16 +360,16 @@ void setup(CLI::App& parent) {
   sub->add_option("--density", a->density,
                   "Per-vertex density (GIFTI shape / FreeSurfer curv / text, > 0): a region of density 2 gets twice its "
                   "natural share of the square");
-  sub->add_option("--k", a->k, "Element grid K (K x K elements) for metrics and PNG")->check(CLI::Range(1, 1024))->capture_default_str();
+  sub->add_option("--k", a->k, "Element grid K (K x K elements) for metrics and PNG")->check(in_range(1, 1024))->capture_default_str();
   sub->add_option("--method", a->method, "Flow: grid (Moser flow on a DCT grid, default) or mesh (discrete Lie flow, DLF)")
       ->check(CLI::IsMember({"grid", "mesh"}))
       ->capture_default_str();
-  sub->add_option("--grid", a->grid, "Grid cells per side (grid method)")->check(CLI::Range(16, 4096))->capture_default_str();
-  sub->add_option("--passes", a->passes, "Maximum flow passes (grid method)")->check(CLI::Range(0, 100))->capture_default_str();
-  sub->add_option("--iterations", a->iterations, "Maximum steps (mesh method)")->check(CLI::Range(0, 100000))->capture_default_str();
+  sub->add_option("--grid", a->grid, "Grid cells per side (grid method)")->check(in_range(16, 4096))->capture_default_str();
+  sub->add_option("--passes", a->passes, "Maximum flow passes (grid method)")->check(in_range(0, 100))->capture_default_str();
+  sub->add_option("--iterations", a->iterations, "Maximum steps (mesh method)")->check(in_range(0, 100000))->capture_default_str();
   sub->add_option("--fixed-steps", a->fixed_steps,
                   "Mesh method with Zou's fixed schedule of K steps (eq. 19) instead of adaptive steps")
-      ->check(CLI::Range(0, 100000));
+      ->check(in_range(0, 100000));
   sub->add_flag("--no-polish", a->no_polish, "Skip the final per-face Gauss-Newton polish (grid method)");
   add_max_memory_option(*sub, &a->max_memory);
   sub->add_option("--max-vertices", a->max_vertices,

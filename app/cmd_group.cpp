@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "app/cohort.h"
+#include "analysis/normative.h"
 #include "app/command.h"
 #include "core/error.h"
 
@@ -56,8 +57,17 @@ pid_t spawn_logged(const std::vector<std::string>& argv, const std::string& log_
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
+  // The child ends with this process however it ends (kill -9 included): main() reads this
+  // variable and asks the kernel for SIGTERM on its parent's death (app/main.cpp).
+  std::vector<std::string> env_strings;
+  for (char** e = environ; *e != nullptr; ++e)
+    if (std::strncmp(*e, kParentPidVariable, std::strlen(kParentPidVariable)) != 0) env_strings.emplace_back(*e);
+  env_strings.push_back(std::string(kParentPidVariable) + "=" + std::to_string(::getpid()));
+  std::vector<char*> env;
+  for (auto& s : env_strings) env.push_back(s.data());
+  env.push_back(nullptr);
   pid_t pid = -1;
-  const int rc = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  const int rc = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), env.data());
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) throw ProcessingError("cannot start " + argv[0] + ": " + std::strerror(rc));
   return pid;
@@ -158,7 +168,7 @@ int run_group(const GroupArgs& a) {
   summary["cohort"] = a.cohort;
   summary["controls_used"] = used;
   int reference_exit = -1;
-  if (used >= 2) {
+  if (used >= analysis::kMinControls) {
     build.push_back("--quiet");
     Job ref;
     ref.id = "reference";
@@ -168,7 +178,7 @@ int run_group(const GroupArgs& a) {
     run_jobs(one, 1, "reference", progress);
     reference_exit = one[0].exit_code;
   } else {
-    std::cerr << "authalic group: only " << used << " controls succeeded; at least 2 are needed for a reference\n";
+    std::cerr << "authalic group: only " << used << " controls succeeded; at least " << analysis::kMinControls << " are needed for a reference\n";
   }
 
   // 3. Patients, compared with the reference when there is one.
@@ -204,7 +214,7 @@ const bool registered = register_command({60, [](CLI::App& parent) {
   sub->add_option("out", args->out, "Output folder")->required();
   sub->add_option("--jobs,-j", args->jobs, "Subjects processed at once (threads are shared among them)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--k", args->k, "Element grid: K x K per hemisphere square")->check(CLI::Range(2, 512));
+  sub->add_option("--k", args->k, "Element grid: K x K per hemisphere square")->check(in_range(2, 512));
   sub->add_flag("--force", args->force, "Write into an existing output folder");
   add_common_options(*sub);
   sub->callback([args]() { set_exit_code(run_group(*args)); });

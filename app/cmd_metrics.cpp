@@ -23,6 +23,38 @@ struct MetricsArgs {
   int k = 32;
 };
 
+// A 3D surface given as the map would give numbers that mean nothing: a planar map must be flat
+// (z constant) and a sphere map on one sphere about the origin.
+void check_map_shape(const std::string& path, const MatrixXd& U, const MatrixXi& F, MapDomain domain) {
+  std::vector<int> used;
+  {
+    std::vector<char> seen(static_cast<std::size_t>(U.rows()), 0);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int c = 0; c < 3; ++c)
+        if (!seen[static_cast<std::size_t>(F(f, c))]++) used.push_back(F(f, c));
+  }
+  std::ostringstream s;
+  s << std::setprecision(3);
+  if (domain == MapDomain::Sphere) {
+    double lo = INFINITY, hi = 0;
+    for (int v : used) lo = std::min(lo, U.row(v).norm()), hi = std::max(hi, U.row(v).norm());
+    if (!(hi > 0) || (hi - lo) > 0.05 * hi) {  // FreeSurfer spheres: within 0.01 %; brains: 30 % and more
+      s << path << ": is not a sphere map (distances from the origin range from " << lo << " to " << hi
+        << "); give the map written by `authalic sphere`, or --domain square/rectangle for a flat map";
+      throw InputError(s.str());
+    }
+    return;
+  }
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  for (int v : used) lo = lo.cwiseMin(U.row(v).transpose()), hi = hi.cwiseMax(U.row(v).transpose());
+  const double extent = std::max(hi.x() - lo.x(), hi.y() - lo.y());
+  if (U.cols() > 2 && !((hi.z() - lo.z()) <= 1e-6 * extent)) {
+    s << path << ": is not a flat map (z spans " << (hi.z() - lo.z()) << " against an x-y extent of " << extent
+      << "): it looks like a 3D surface; give the map written by `authalic flatten`, or --domain sphere";
+    throw InputError(s.str());
+  }
+}
+
 void run(const MetricsArgs& a) {
   const io::Surface surface = io::read_surface(a.surface);
   const io::Surface map = io::read_surface(a.map);
@@ -44,6 +76,7 @@ void run(const MetricsArgs& a) {
   MatrixXi F(static_cast<Eigen::Index>(keep.size()), 3);
   for (size_t k = 0; k < keep.size(); ++k) F.row(k) = Fm.row(keep[k]);
   MatrixXd U = map.mesh.V.topRows(nv);
+  check_map_shape(a.map, U, F, domain);
 
   // Planar maps written in mm (e.g. flatten's OUT) are brought to their domain by one uniform
   // scale and shift of the used vertices' bounding box (ratios do not depend on it; the element
@@ -104,7 +137,7 @@ void setup(CLI::App& parent) {
       ->check(CLI::IsMember({"square", "rectangle", "sphere"}))
       ->capture_default_str();
   sub->add_option("--k", a->k, "Element grid K: K x K (square), 2K x K (rectangle, sphere)")
-      ->check(CLI::Range(1, 1024))
+      ->check(in_range(1, 1024))
       ->capture_default_str();
   add_common_options(*sub);
   sub->callback([a]() { run(*a); });

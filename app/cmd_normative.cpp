@@ -13,6 +13,7 @@
 #include "app/command.h"
 #include "core/error.h"
 #include "io/surface_io.h"
+#include "io/file_roles.h"
 
 namespace authalic::app {
 namespace {
@@ -21,11 +22,13 @@ struct BuildArgs {
   std::string out;
   std::vector<std::string> tables;
   std::string list;
+  bool partial = false;
 };
 
 struct MergeArgs {
   std::string out;
   std::vector<std::string> inputs;
+  bool partial = false;
 };
 
 struct CompareArgs {
@@ -77,7 +80,12 @@ int run_build(const BuildArgs& a) {
     }
   }
   if (tables.empty()) throw InputError("normative build: no element table given; list the controls' *_elements.csv files");
-  const auto ref = analysis::build_reference(tables, terminal_progress());
+  std::vector<std::string> inputs = {a.list};
+  for (const auto& t : tables) inputs.insert(inputs.end(), {t, analysis::element_sidecar_path(t)});
+  io::check_file_roles(inputs, {a.out});
+  auto ref = analysis::build_reference(tables, terminal_progress());
+  ref.partial = a.partial;
+  if (!a.partial) analysis::check_reference_usable(ref, a.out);
   analysis::write_reference(a.out, ref);
   print_reference_summary(ref, a.out, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
                           cpu_seconds_since(cpu_start));
@@ -88,9 +96,12 @@ int run_merge(const MergeArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
   if (a.inputs.empty()) throw InputError("normative merge: no reference given");
+  io::check_file_roles(a.inputs, {a.out});
   analysis::NormativeReference r = analysis::read_reference(a.inputs[0]);
   for (std::size_t i = 1; i < a.inputs.size(); ++i)
     r = analysis::merge_references(r, analysis::read_reference(a.inputs[i]), "the merged references", a.inputs[i]);
+  r.partial = a.partial;
+  if (!a.partial) analysis::check_reference_usable(r, a.out);
   analysis::write_reference(a.out, r);
   print_reference_summary(r, a.out, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
                           cpu_seconds_since(cpu_start));
@@ -101,8 +112,14 @@ int run_compare(const CompareArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
   const analysis::NormativeReference ref = analysis::read_reference(a.reference);
+  {
+    std::vector<std::string> inputs = {a.reference, a.patient, analysis::element_sidecar_path(a.patient)};
+    inputs.insert(inputs.end(), a.labels.begin(), a.labels.end());
+    io::check_file_roles(inputs, analysis::comparison_output_paths(a.prefix, ref.hemispheres, std::vector<bool>(a.labels.size(), true)).all());
+  }
   const analysis::ElementTable patient = analysis::read_element_table(a.patient);
   analysis::CompareOptions o;
+  o.reference_name = a.reference;
   o.threshold = a.threshold;
   o.age = a.age;
   o.use_age = !a.no_age;
@@ -159,6 +176,9 @@ const bool registered = register_command({50, [](CLI::App& parent) {
   build->add_option("OUT", b->out, "Output reference (.json)")->required();
   build->add_option("TABLES", b->tables, "Element tables of the control subjects");
   build->add_option("--list", b->list, "Text file with one element-table path a line (for large cohorts)");
+  build->add_flag("--partial", b->partial,
+                  "A partial reference for a later `normative merge` (e.g. one per control in a workflow): fewer than 3 "
+                  "controls allowed; `compare` refuses it until it is merged into a full one");
   add_common_options(*build);
   build->callback([b]() { set_exit_code(run_build(*b)); });
 
@@ -166,6 +186,7 @@ const bool registered = register_command({50, [](CLI::App& parent) {
   CLI::App* merge = sub->add_subcommand("merge", "Merge references exactly (same domain, K, hemispheres, normalisation; disjoint subjects)");
   merge->add_option("OUT", m->out, "Output reference (.json)")->required();
   merge->add_option("REFERENCES", m->inputs, "References to merge")->required();
+  merge->add_flag("--partial", m->partial, "The result is again a partial reference (hierarchical merges)");
   add_common_options(*merge);
   merge->callback([m]() { set_exit_code(run_merge(*m)); });
 
@@ -181,7 +202,7 @@ const bool registered = register_command({50, [](CLI::App& parent) {
   compare->add_option("--labels", c->labels,
                       "Element label file(s) (.label.gii from `authalic elements`), one per hemisphere block in the "
                       "reference's order, for per-vertex z");
-  compare->add_option("--age", c->age, "Patient's age in years (default: from the table)");
+  compare->add_option("--age", c->age, "Patient's age in years (default: from the table)")->check(age_years());
   compare->add_flag("--no-age", c->no_age, "Ignore the reference's age model");
   compare->add_flag("--plain-sd", c->plain_sd,
                     "z in units of the reference SD itself (NEUROSTAT/3D-SSP) instead of the predictive SD of a new control "
@@ -191,7 +212,7 @@ const bool registered = register_command({50, [](CLI::App& parent) {
                     "the reference over the elements found normal (|z| < threshold), so a focal hypometabolism, which "
                     "lowers the global mean, does not make healthy cortex look hypermetabolic");
   compare->add_option("--min-subjects", c->min_subjects, "Elements with fewer controls get no z")
-      ->check(CLI::Range(2, 1000000))
+      ->check(in_range(2, 1000000))
       ->capture_default_str();
   add_common_options(*compare);
   compare->callback([c]() { set_exit_code(run_compare(*c)); });

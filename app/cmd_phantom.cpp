@@ -37,6 +37,34 @@ struct PhantomArgs {
   long long seed = 1;
 };
 
+// The cohort is written into a hidden sibling folder and its entries (surf/, label/, truth/,
+// sub-*/, cohort.csv, phantom.json) are moved into OUT_DIR only when all are complete, each by one
+// rename: a killed or failed run leaves OUT_DIR as it was. Other files in OUT_DIR (a README) stay.
+analysis::PhantomResult write_staged(const std::string& out_dir, const analysis::PhantomOptions& o) {
+  const fs::path out = fs::absolute(out_dir).lexically_normal();
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw InputError(out_dir + ": exists and is not a folder; give a folder for the cohort");
+  const fs::path stage = out.parent_path() / ("." + out.filename().string() + ".partial-" + std::to_string(::getpid()));
+  analysis::PhantomResult r;
+  try {
+    fs::remove_all(stage, ec);
+    r = analysis::write_phantom(stage.string(), o, terminal_progress());
+    fs::create_directories(out);
+    for (const auto& entry : fs::directory_iterator(stage)) {
+      const fs::path target = out / entry.path().filename();
+      fs::remove_all(target);
+      fs::rename(entry.path(), target);
+    }
+    fs::remove(stage);
+  } catch (...) {
+    fs::remove_all(stage, ec);
+    throw;
+  }
+  r.cohort_csv = (out / fs::path(r.cohort_csv).filename()).string();
+  return r;
+}
+
 void setup(CLI::App& parent) {
   auto args = std::make_shared<PhantomArgs>();
   CLI::App* sub = parent.add_subcommand(
@@ -46,19 +74,19 @@ void setup(CLI::App& parent) {
       "the ground truth, and cohort.csv. Uses ../shared/data (fsaverage5 + spm/PET.nii) when present, else a built-in "
       "synthetic folded hemisphere (4002 vertices, pial 2.5 mm outside white) and a tissue-model PET.");
   sub->add_option("OUT_DIR", args->out_dir, "Output folder (created)")->required();
-  sub->add_option("--controls", args->options.controls, "Number of control subjects")->check(CLI::Range(0, 2000))
+  sub->add_option("--controls", args->options.controls, "Number of control subjects")->check(in_range(0, 2000))
       ->capture_default_str();
-  sub->add_option("--patients", args->options.patients, "Number of patients (planted region)")->check(CLI::Range(0, 2000))
+  sub->add_option("--patients", args->options.patients, "Number of patients (planted region)")->check(in_range(0, 2000))
       ->capture_default_str();
   sub->add_option("--seed", args->seed, "Random seed: the same seed gives byte-identical files")->capture_default_str();
   sub->add_flag("--synthetic", args->options.synthetic, "Use the built-in synthetic hemisphere and PET even when shared data exist");
   sub->add_option("--shared", args->shared, "Folder with fsaverage5/ and spm/PET.nii (default: ../shared/data beside the checkout)");
-  sub->add_option("--voxel-size", args->options.voxel_mm, "Synthetic PET voxel size (mm)")->check(CLI::Range(1.0, 10.0))
+  sub->add_option("--voxel-size", args->options.voxel_mm, "Synthetic PET voxel size (mm)")->check(in_range(1.0, 10.0))
       ->capture_default_str();
   sub->add_option("--radius", args->options.region_radius_mm, "Planted region radius along the white surface (mm)")
-      ->check(CLI::Range(2.0, 80.0))->capture_default_str();
+      ->check(in_range(2.0, 80.0))->capture_default_str();
   sub->add_option("--depth", args->options.region_depth, "Planted reduction as a fraction (0.25 = -25%)")
-      ->check(CLI::Range(0.01, 0.95))->capture_default_str();
+      ->check(in_range(0.01, 0.95))->capture_default_str();
   add_common_options(*sub);
   sub->callback([args]() {
     analysis::PhantomOptions o = args->options;
@@ -67,7 +95,7 @@ void setup(CLI::App& parent) {
     if (!args->shared.empty() && !o.synthetic && !fs::exists(args->shared + "/spm/PET.nii")) {
       throw InputError(args->shared + ": no spm/PET.nii and fsaverage5/ here; give the shared data folder or use --synthetic");
     }
-    const analysis::PhantomResult r = analysis::write_phantom(args->out_dir, o, terminal_progress());
+    analysis::PhantomResult r = write_staged(args->out_dir, o);
     int region_vertices = 0;
     for (bool b : r.region.left_mask) region_vertices += b;
     if (global_options().json) {

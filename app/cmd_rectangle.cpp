@@ -19,6 +19,7 @@
 #include "core/sulcal_depth.h"
 #include "io/image_io.h"
 #include "io/surface_io.h"
+#include "io/file_roles.h"
 
 namespace authalic::app {
 namespace {
@@ -102,6 +103,23 @@ nlohmann::json part_json(const RectanglePart& p) {
             {"stop_reason", p.flow.stop_reason},
             {"repaired_vertices", p.flow.repaired},
             {"flips", p.flow.flips}}}};
+}
+
+// Every file the command will write, for the up-front path checks (io/file_roles.h).
+std::vector<std::string> output_paths(const RectangleArgs& a) {
+  std::vector<std::string> out = {a.metrics, a.png, a.histogram};
+  if (!a.surface.empty()) {
+    const std::string stem = stem_of(a.out);
+    out.push_back(a.out);
+    if (a.flat) out.push_back(stem + ".flat.surf.gii");
+    if (a.cut_surface) out.push_back(stem + ".cut.surf.gii");
+  } else {
+    out.push_back(a.out + ".lh.surf.gii");
+    out.push_back(a.out + ".rh.surf.gii");
+    if (a.flat) out.push_back(a.out + ".lh.flat.surf.gii");
+    if (a.flat) out.push_back(a.out + ".rh.flat.surf.gii");
+  }
+  return out;
 }
 
 // All parts as one mesh in the rectangle: surface V, map UV, initial map UV0, faces F.
@@ -340,10 +358,11 @@ void setup(CLI::App& parent) {
       ->check(CLI::IsMember({"auto", "surface", "sphere"}))
       ->capture_default_str()
       ->needs(surface);
-  sub->add_option("--k", a->k, "Element grid: 2K x K cells")->check(CLI::Range(1, 512))->capture_default_str();
+  sub->add_option("--k", a->k, "Element grid: 2K x K cells")->check(in_range(1, 512))->capture_default_str();
   add_common_options(*sub);
   sub->callback([a]() {
     if (a->surface.empty() && a->lh.empty()) throw InputError("rectangle: give --surface S, or --lh S --rh S (see --help)");
+    io::check_file_roles({a->surface, a->lh, a->rh, a->lh_faces, a->rh_faces, a->sulc, a->lh_sulc, a->rh_sulc}, output_paths(*a));
     if (!a->surface.empty()) {
       run_one_surface(*a);
     } else {

@@ -14,6 +14,7 @@
 #include "core/sulcal_depth.h"
 #include "io/image_io.h"
 #include "io/surface_io.h"
+#include "io/file_roles.h"
 
 namespace authalic::app {
 namespace {
@@ -48,17 +49,21 @@ void setup(CLI::App& parent) {
   sub->add_option("--colormap", a->colormap, "gray, viridis, coolwarm, hot (append _r to reverse)")->capture_default_str();
   sub->add_option("--range", a->range, "Colour range: LO HI (default: 2nd-98th percentile)")->expected(2);
   sub->add_option("--label", a->label, "Colour-bar label with units, e.g. 'sulc (mm)'");
-  sub->add_option("--grid", a->grid, "Draw the K x K element grid (2K x K on the rectangle)")->check(CLI::Range(0, 512));
+  sub->add_option("--grid", a->grid, "Draw the K x K element grid (2K x K on the rectangle)")->check(in_range(0, 512));
   sub->add_option("--domain", a->domain, "square ([0,1]^2), rectangle ([0,2] x [0,1]) or fit (the map's bounding box, "
                                          "e.g. a flat surface in mm or a FreeSurfer flat patch)")
       ->check(CLI::IsMember({"square", "rectangle", "fit"}))
       ->capture_default_str();
   sub->add_option("--caption", a->captions, "Caption under each map (repeat, in order)");
   sub->add_option("--title", a->title, "Title over each map");
-  sub->add_option("--width", a->width, "Width of each map picture (pixels)")->check(CLI::Range(100, 4000))->capture_default_str();
+  sub->add_option("--width", a->width, "Width of each map picture (pixels)")->check(in_range(100, 4000))->capture_default_str();
   add_common_options(*sub);
   sub->callback([a]() {
     analysis::colormap(a->colormap, 0.0);  // an unknown name is an input error before any work
+    std::vector<std::string> inputs = a->maps;
+    inputs.push_back(a->values);
+    inputs.push_back(a->sulcal_depth_surface);
+    io::check_file_roles(inputs, {a->out});
     if (!a->values.empty() && !a->sulcal_depth_surface.empty()) {
       throw InputError("render: give --values or --sulcal-depth, not both");
     }

@@ -94,12 +94,14 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_option("--pet", in.pet, "PET volume registered to the surfaces (NIfTI, MGH/MGZ, DICOM folder); world = scanner RAS");
   sub->add_option("--t1", in.t1, "T1 MRI the surfaces belong to: the PET is rigidly registered to it (ITK v4, Mattes mutual information) before sampling; without it the PET is assumed co-registered");
   sub->add_option("--normative", in.normative, "Normative reference (authalic normative build): adds z-scores");
-  sub->add_option("--age", in.age, "Age in years (used by references with an age model)");
+  sub->add_option("--frame", a->options.pet_frame, "4D PET: the frame to sample (0-based)")->check(in_range(0, 100000));
+  sub->add_flag("--sum-frames", a->options.pet_sum_frames, "4D PET: sum all frames (a static image from dynamic frames)");
+  sub->add_option("--age", in.age, "Age in years (used by references with an age model)")->check(age_years());
   sub->add_option("--out", a->options.out_dir, "Output folder; the subject goes to OUT/sub-<id>")->required();
   sub->add_flag("--force", a->options.force, "Replace an existing OUT/sub-<id>");
-  sub->add_option("--k", a->options.k, "Elements: K x K per hemisphere (equal-area cells)")->check(CLI::Range(2, 512));
+  sub->add_option("--k", a->options.k, "Elements: K x K per hemisphere (equal-area cells)")->check(in_range(2, 512));
   sub->add_option("--depth", a->options.depth_mm, "Normal projection depth, mm (default 10, Zou et al. 2011)")
-      ->check(CLI::Range(0.0, 50.0));
+      ->check(in_range(0.0, 50.0));
   sub->add_option("--normalize", a->options.normalize,
                   "Intensity normalisation: none, global (cortical mean), or a reference-region mask NIfTI (SUVR)");
   sub->add_option("--threshold", a->options.z_threshold, "|z| at or beyond which an element is abnormal (default 2)");

@@ -21,6 +21,7 @@
 #include "io/registration.h"
 #include "io/surface_io.h"
 #include "io/volume_io.h"
+#include "io/file_roles.h"
 
 namespace authalic::app {
 namespace {
@@ -59,6 +60,8 @@ std::string png_path_for(const std::string& out) {
 
 int run_sample(const SampleArgs& a) {
   const auto start = std::chrono::steady_clock::now();
+  io::check_file_roles({a.volume, a.surface, a.ribbon, a.surface_to_volume, a.register_t1, a.map},
+                       {a.out, a.png.empty() ? png_path_for(a.out) : a.png});
   if (a.trilinear && !a.ribbon.empty()) throw InputError("--trilinear and --ribbon: choose one sampling mode");
   if (a.stat != "mean" && a.stat != "max") throw InputError("--stat: '" + a.stat + "' is not mean or max");
   if (!a.register_t1.empty() && !a.surface_to_volume.empty())
@@ -124,7 +127,11 @@ int run_sample(const SampleArgs& a) {
   norm.units = volume.units.empty() ? "PET units" : volume.units;
   norm.description = "none: values in the PET's units";
   if (a.normalize == "global") {
-    norm = analysis::global_cortical_mean(result.values, V_world, surface.mesh.F);
+    try {
+      norm = analysis::global_cortical_mean(result.values, V_world, surface.mesh.F);
+    } catch (const InputError& e) {
+      throw InputError(a.volume + " on " + a.surface + ": " + e.what());
+    }
   } else if (a.normalize != "none") {
     io::Volume mask = io::read_volume(a.normalize);
     norm = analysis::reference_region_mean(volume, mask);
@@ -223,9 +230,9 @@ const bool registered = register_command({40, [](CLI::App& parent) {
   sub->add_option("--ribbon", a->ribbon,
                   "Ribbon mode: the other surface of the cortical ribbon (white with pial, same vertices); the value is "
                   "the mean along the segment between corresponding vertices (at least 11 samples)");
-  sub->add_option("--depth", a->depth, "Normal projection depth (mm)")->capture_default_str()->check(CLI::Range(0.0, 100.0));
-  sub->add_option("--step", a->step, "Sampling step (mm); default and maximum: half the smallest voxel size")
-      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--depth", a->depth, "Normal projection depth (mm)")->capture_default_str()->check(in_range(0.0, 100.0));
+  sub->add_option("--step", a->step, "Sampling step (mm, 0.05 to 10); default and maximum: half the smallest voxel size")
+      ->check(in_range(0.05, 10.0));
   sub->add_option("--stat", a->stat, "Statistic along the segment: mean, or max (as 3D-SSP)")
       ->check(CLI::IsMember({"mean", "max"}))
       ->capture_default_str();

@@ -19,6 +19,7 @@
 #include "core/sulcal_depth.h"
 #include "io/image_io.h"
 #include "io/surface_io.h"
+#include "io/file_roles.h"
 
 namespace authalic::app {
 namespace {
@@ -46,6 +47,7 @@ const char* kOrientationRule =
 
 void run(const SphereArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
+  io::check_file_roles({a.surface, a.sulc}, {a.out, a.metrics, a.png, a.conformal});
   const io::Surface surface = io::read_surface(a.surface);
   const TriMesh& mesh = surface.mesh;
   check_memory(a.surface, mesh.num_vertices(), sphere_map_memory_bytes(mesh.num_vertices()), a.max_memory);
@@ -203,8 +205,8 @@ void setup(CLI::App& parent) {
   sub->add_option("--puncture", a->puncture, "Face index of Haker's puncture (default: best-shaped faces in turn)")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--grid", a->grid, "Background cube-sphere cells per cube edge (default: from the mesh size)")
-      ->check(CLI::Range(8, 512));
-  sub->add_option("--passes", a->passes, "Moser flow passes")->check(CLI::Range(0, 50))->capture_default_str();
+      ->check(in_range(8, 512));
+  sub->add_option("--passes", a->passes, "Moser flow passes")->check(in_range(0, 50))->capture_default_str();
   sub->add_option("--route", a->route,
                   "square: through the authalic square map of all but a cap of 10 % of the area, then per-face polish on "
                   "the sphere (works on native-resolution meshes); flow: Haker's conformal sphere + Moser flow on the "

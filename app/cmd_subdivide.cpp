@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/mesh.h"
 #include "io/surface_io.h"
+#include "io/file_roles.h"
 
 namespace authalic::app {
 namespace {
@@ -24,11 +25,12 @@ void setup(CLI::App& parent) {
       "their order; new vertices are edge midpoints (mm, same space as the input).");
   sub->add_option("IN", a->in, "Input surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, STL)")->required();
   sub->add_option("OUT", a->out, "Output surface (format by extension)")->required();
-  sub->add_option("--times", a->times, "Number of subdivisions")->check(CLI::Range(1, 6))->capture_default_str();
+  sub->add_option("--times", a->times, "Number of subdivisions")->check(in_range(1, 6))->capture_default_str();
   sub->add_option("--faces-from", a->faces_from,
                   "Subdivide this surface's triangles instead (same vertices as IN, e.g. a cortex patch's face set)");
   add_common_options(*sub);
   sub->callback([a]() {
+    io::check_file_roles({a->in, a->faces_from}, {a->out});
     io::Surface s = io::read_surface(a->in);
     if (!a->faces_from.empty()) {
       const io::Surface other = io::read_surface(a->faces_from);

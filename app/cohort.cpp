@@ -6,6 +6,7 @@
 #include <set>
 #include <sstream>
 
+#include "app/command.h"
 #include "core/error.h"
 
 namespace fs = std::filesystem;
@@ -60,16 +61,17 @@ std::vector<CohortSubject> read_cohort(const std::string& path) {
     CohortSubject s;
     s.id = get("subject_id");
     if (s.id.empty()) throw InputError(where + ": empty subject_id");
+    // The id becomes folder and log names (sub-<id>, logs/<id>.log): letters and digits only
+    // (BIDS labels), checked before any file is made, so '../x' cannot escape the output folder.
+    for (char c : s.id)
+      if (!std::isalnum(static_cast<unsigned char>(c)))
+        throw InputError(where + ": subject_id '" + s.id + "' has characters other than letters and digits (BIDS labels); rename it, e.g. 'patient01'");
     if (!seen.insert(s.id).second) throw InputError(where + ": subject '" + s.id + "' is listed twice");
     s.role = get("role");
     if (s.role != "control" && s.role != "patient")
       throw InputError(where + ": role '" + s.role + "' is neither 'control' nor 'patient'");
     if (col.count("age") && !get("age").empty()) {
-      try {
-        s.age = std::stod(get("age"));
-      } catch (const std::exception&) {
-        throw InputError(where + ": age '" + get("age") + "' is not a number");
-      }
+      s.age = parse_age(get("age"), where);
     }
     auto file = [&](const std::string& name) {
       const std::string v = get(name);

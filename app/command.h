@@ -26,6 +26,16 @@ struct GlobalOptions {
 };
 GlobalOptions& global_options();
 
+// Validator for a number in [lo, hi], with the bounds printed as written ("0.05 to 10", not
+// CLI::Range's "0.050000 to 10.000000"); NaN and trailing characters are refused.
+CLI::Validator in_range(double lo, double hi);
+
+// Validator for ages in years: a plain finite number in [0, 130] ("7O", "nan", "-inf", "-5"
+// are refused, not read as 7 or unknown).
+CLI::Validator age_years();
+// The same rule for text (a cohort CSV cell); returns the age or throws InputError("<where>: ...").
+double parse_age(const std::string& text, const std::string& where);
+
 // Adds --quiet/--json/--threads to a subcommand.
 void add_common_options(CLI::App& sub);
 
@@ -33,6 +43,10 @@ void add_common_options(CLI::App& sub);
 void info(const std::string& line);
 // A ProgressFn that draws on a terminal (stderr is a tty, not --quiet/--json) and is silent otherwise.
 ProgressFn terminal_progress();
+
+// Environment variable `group` sets for its child processes: the parent's pid. A child that sees
+// it dies with that parent (prctl PR_SET_PDEATHSIG), so a killed `group` leaves no orphan runs.
+inline constexpr const char* kParentPidVariable = "AUTHALIC_PARENT_PID";
 
 // Exit code a subcommand's callback reports to main.
 void set_exit_code(int code);

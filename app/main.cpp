@@ -1,9 +1,18 @@
 // authalic: area-preserving cortical maps and PET quantification. One executable, subcommands.
 #include <omp.h>
+#include <sys/prctl.h>
 #include <unistd.h>
+
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <csignal>
+#include <cstdlib>
+#include <string>
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <vector>
 
@@ -31,12 +40,59 @@ GlobalOptions& global_options() {
   return options;
 }
 
+// Shortest text that reads back as x, without an exponent for ordinary magnitudes.
+std::string plain_number(double x) {
+  char buf[32];
+  for (int p = 1; p <= 17; ++p) {
+    std::snprintf(buf, sizeof buf, "%.*g", p, x);
+    const bool exponent_ok = x != 0 && (std::abs(x) >= 1e7 || std::abs(x) < 1e-4);
+    if (std::strtod(buf, nullptr) == x && (exponent_ok || std::strchr(buf, 'e') == nullptr)) break;
+  }
+  return buf;
+}
+
+CLI::Validator in_range(double lo, double hi) {
+  const std::string range = plain_number(lo) + " to " + plain_number(hi);
+  return CLI::Validator(
+      [lo, hi, range](std::string& value) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(value.c_str(), &end);
+        if (value.empty() || end != value.c_str() + value.size() || !(x >= lo && x <= hi))
+          return "'" + value + "' is not a number from " + range;
+        return {};
+      },
+      "[" + range + "]");
+}
+
+double parse_age(const std::string& text, const std::string& where) {
+  errno = 0;
+  char* end = nullptr;
+  const double age = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || errno == ERANGE || !std::isfinite(age))
+    throw InputError((where.empty() ? "" : where + ": ") + "age '" + text + "' is not a number of years");
+  if (age < 0 || age > 130) throw InputError((where.empty() ? "" : where + ": ") + "age " + text + " is outside 0 to 130 years");
+  return age;
+}
+
+CLI::Validator age_years() {
+  return CLI::Validator(
+      [](std::string& value) -> std::string {
+        try {
+          parse_age(value, "");
+        } catch (const InputError& e) {
+          return e.what();
+        }
+        return {};
+      },
+      "YEARS (0-130)");
+}
+
 void add_common_options(CLI::App& sub) {
   auto& g = global_options();
   sub.add_flag("--quiet,-q", g.quiet, "No progress or informational output");
   sub.add_flag("--json", g.json, "Print a machine-readable JSON summary on stdout");
-  sub.add_option("--threads", g.threads, "OpenMP threads (0 = all cores); results do not depend on it")
-      ->check(CLI::NonNegativeNumber)
+  sub.add_option("--threads", g.threads, "OpenMP threads (0 = all cores, at most 256); results do not depend on it")
+      ->check(in_range(0, 256))
       ->each([](const std::string& value) {
         const int n = std::stoi(value);
         if (n > 0) omp_set_num_threads(n);
@@ -77,12 +133,35 @@ void set_exit_code(int code) { g_exit_code = code; }
 
 int main(int argc, char** argv) {
   using namespace authalic;
+  if (const char* parent = std::getenv(app::kParentPidVariable)) {
+    // Started by `authalic group`: end with it. The check after prctl closes the race of a parent
+    // that died before the request was made.
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (std::to_string(::getppid()) != parent) return 3;
+  }
   CLI::App cli{"authalic: area-preserving (authalic) maps of the cerebral cortex and equal-area PET "
                "quantification.\nUnits: mm (coordinates), mm^2 (areas). Surfaces are read in their file's space; "
                "FreeSurfer surfaces are tkregister RAS and are moved to scanner RAS with their footer's c_ras."};
   cli.set_version_flag("--version", std::string("authalic ") + kVersion + " (" + kGitRevision + ")");
   cli.require_subcommand(1);
   cli.fallthrough(false);
+  // Usage errors as one line, like every other refusal.
+  // A file name starting with '-' reads as an option: say so when parsing fails.
+  static std::string dash_file;
+  for (int i = 1; i < argc && dash_file.empty(); ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--") break;
+    if (arg.size() > 1 && arg[0] == '-' && arg.find('=') == std::string::npos && arg.find_first_of("./") != std::string::npos &&
+        !std::isdigit(static_cast<unsigned char>(arg[1])))
+      dash_file = arg;
+  }
+  cli.failure_message([](const CLI::App*, const CLI::Error& e) {
+    std::string what = e.what();
+    if (!dash_file.empty())
+      what += "; if " + dash_file + " is a file, a name starting with '-' goes after '--' (authalic CMD [options] -- " + dash_file +
+              " ...) or as ./" + dash_file;
+    return "authalic: error: " + what + " (see --help)\n";
+  });
 
   auto commands = app::registry();
   std::sort(commands.begin(), commands.end(), [](const app::Command& a, const app::Command& b) { return a.order < b.order; });

@@ -41,7 +41,9 @@ struct SphereGridSpec {
 // Pieces of every triangle of a sphere map (#V x 3, any radius, centred at the origin) with the
 // sphere cells (computed in (longitude, z) coordinates, where the cells are rectangles and the
 // map is area-preserving up to the constant 1 per steradian; triangles crossing the date line are
-// split). domain_area is in steradians.
+// split). Triangle edges are great-circle arcs, followed in (longitude, z) to 1e-10 sr, and a
+// triangle inside one cell is one piece with its exact spherical area, so that domain_area (in
+// steradians) is that of the spherical triangle's part in the cell.
 std::vector<OverlapPiece> sphere_grid_overlap(const MatrixXd& S, const MatrixXi& F, const SphereGridSpec& grid);
 
 // Cortical area (surface units^2, mm^2 for cortex) that each cell receives: sum over pieces of

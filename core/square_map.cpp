@@ -28,6 +28,28 @@ std::string disk_topology_problem(const MatrixXd& V, const MatrixXi& F) {
   return s.str();
 }
 
+std::string region_geometry_problem(const MatrixXd& V, const MatrixXi& F) {
+  // Cortical coordinates are within a few hundred mm; 1e38 overflows every area and angle.
+  constexpr double kMaxCoordinate = 1e6;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const auto p = V.row(F(f, c));
+      if (!p.allFinite() || p.cwiseAbs().maxCoeff() > kMaxCoordinate) {
+        std::ostringstream s;
+        s << "vertex " << F(f, c) << " is at (" << p(0) << ", " << p(1) << ", " << p(2)
+          << "), not finite or beyond 1e6 mm: the coordinates are not in mm or the file is corrupt";
+        return s.str();
+      }
+    }
+  // Zero-area triangles have no cotangent weights: the harmonic map's system is singular.
+  const std::vector<int> degenerate = degenerate_faces(V, F);
+  if (!degenerate.empty())
+    return std::to_string(degenerate.size()) + " of its " + std::to_string(F.rows()) + " triangles are degenerate (zero area, first: face " +
+           std::to_string(degenerate.front()) + (degenerate.size() == static_cast<std::size_t>(F.rows()) ? "; the region is collapsed to a point or a line" : "") +
+           "); remove or repair them (e.g. merge the coincident vertices) before mapping";
+  return {};
+}
+
 MatrixXd extend_to_inserted(const MatrixXd& values, const ConformalMapResult& initial) {
   const Eigen::Index n0 = initial.num_input_vertices, k = initial.inserted_parents.rows();
   MatrixXd out(n0 + k, values.cols());
@@ -44,6 +66,8 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   if (!(opt.width > 0)) throw InputError("square map: the rectangle width must be positive");
   const std::string problem = disk_topology_problem(V, F_in);
   if (!problem.empty()) throw InputError("region: " + problem);
+  const std::string geometry = region_geometry_problem(V, F_in);
+  if (!geometry.empty()) throw InputError("region: " + geometry);
   if (opt.density.size() > 0) {
     if (opt.density.size() != V.rows())
       throw InputError("density: " + std::to_string(opt.density.size()) + " values for " + std::to_string(V.rows()) +

@@ -69,6 +69,9 @@ struct SquareMapResult {
 // Empty when (V, F) is one disk; otherwise a one-line description of the measured topology and
 // what a square map needs, for an InputError message.
 std::string disk_topology_problem(const MatrixXd& V, const MatrixXi& F);
+// "" when the region's geometry can be mapped, else what is wrong: a vertex that is not finite or
+// beyond 1e6 mm, or degenerate (zero-area) triangles.
+std::string region_geometry_problem(const MatrixXd& V, const MatrixXi& F);
 
 // The map. V: #V x 3 (mm, RAS), F: region faces (a disk). Throws InputError when the region is
 // not a disk (message from disk_topology_problem) or the density is invalid, ProcessingError if

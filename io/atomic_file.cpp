@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "io/file_roles.h"
 #include "io/io_internal.h"
 
 namespace authalic::io {
@@ -73,7 +74,15 @@ std::pair<std::string, std::string> split_name(const std::string& name) {
 
 }  // namespace
 
-void write_atomically(const std::string& path, const std::function<void(const std::string& tmp_path)>& write) {
+void write_atomically(const std::string& path_given, const std::function<void(const std::string& tmp_path)>& write) {
+  // A symlink is written through (its target is replaced, the link stays); anything else that
+  // exists and is not a regular file is refused, since rename(2) would replace the node itself
+  // (a device such as /dev/full, a FIFO). Commands check this up front (io/file_roles.h); this is
+  // the last line of defence for every writer.
+  const std::string path = write_target(path_given);
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode))
+    throw std::runtime_error(path_given + ": exists and is not a regular file; writing would replace it: give a file path");
   const fs::path target(path);
   const std::string name = target.filename().string();
   if (name.empty() || name == "." || name == "..") throw std::runtime_error(path + ": not a file name; give a file path to write");
@@ -93,6 +102,7 @@ void write_atomically(const std::string& path, const std::function<void(const st
   ::fchmod(fd, 0666 & ~current_umask());
   ::close(fd);
   const std::string tmp(buf.data());
+  const detail::RemoveOnSignal remove_on_signal(tmp);  // a SIGTERM mid-write leaves no temporary file
 
   try {
     write(tmp);

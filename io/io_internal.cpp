@@ -3,7 +3,14 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include <signal.h>
+
 #include <algorithm>
+#include <csignal>
+#include <memory>
+#include <mutex>
+#include <cstdint>
+#include <new>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -52,8 +59,50 @@ std::string read_file_maybe_gz(const std::string& path) {
   return bytes;
 }
 
+namespace {
+
+// The bytes a NIfTI-1/2 or MGH image declares (header, voxels, a margin for extensions and
+// tags), from its first 540 decompressed bytes; 0 when the head is neither (no bound known).
+long double declared_image_bytes(const std::string& head) {
+  if (head.size() < 540) return 0;
+  const std::uint16_t one = 1;
+  const bool little = *reinterpret_cast<const unsigned char*>(&one) == 1;
+  for (const bool swap : {false, true}) {
+    const auto sizeof_hdr = field_at<std::int32_t>(head, 0, swap);
+    if (sizeof_hdr == 348 || sizeof_hdr == 540) {
+      const bool v2 = sizeof_hdr == 540;
+      const int ndim = v2 ? static_cast<int>(field_at<std::int64_t>(head, 16, swap)) : field_at<std::int16_t>(head, 40, swap);
+      const int bitpix = v2 ? field_at<std::int16_t>(head, 14, swap) : field_at<std::int16_t>(head, 72, swap);
+      const long double offset = v2 ? static_cast<long double>(field_at<std::int64_t>(head, 168, swap))
+                                     : static_cast<long double>(field_at<float>(head, 108, swap));
+      if (ndim < 1 || ndim > 7 || bitpix <= 0 || !(offset >= 0)) return 0;
+      long double voxels = 1;
+      for (int d = 1; d <= ndim; ++d)
+        voxels *= std::max<long double>(1, v2 ? static_cast<long double>(field_at<std::int64_t>(head, 16 + 8 * d, swap))
+                                              : static_cast<long double>(field_at<std::int16_t>(head, 40 + 2 * d, swap)));
+      return std::max<long double>(offset, sizeof_hdr) + voxels * bitpix / 8 + (1 << 20);
+    }
+  }
+  // MGH: big-endian version 1, then width, height, depth, frames, type.
+  const bool swap = little;
+  if (field_at<std::int32_t>(head, 0, swap) == 1) {
+    const int type = field_at<std::int32_t>(head, 20, swap);
+    const int size = type == 0 ? 1 : type == 1 || type == 3 ? 4 : type == 4 ? 2 : 0;
+    if (size == 0) return 0;
+    long double voxels = 1;
+    for (int d = 0; d < 4; ++d) voxels *= std::max<std::int32_t>(1, field_at<std::int32_t>(head, 4 + 4 * d, swap));
+    return 284 + voxels * size + (16 << 20);  // tags (scan parameters, command history) follow the voxels
+  }
+  return 0;
+}
+
+}  // namespace
+
 std::string gunzip(const std::string& bytes, const std::string& path) {
   std::string out;
+  // A gzip bomb stops at what the image's own header declares, not at the global limit.
+  long double limit = static_cast<long double>(g_max_decompressed_bytes);
+  bool bounded = false;
   z_stream zs{};
   // 15 + 32: zlib or gzip header, detected automatically.
   if (inflateInit2(&zs, 15 + 32) != Z_OK) throw std::runtime_error(path + ": zlib initialisation failed");
@@ -66,9 +115,22 @@ std::string gunzip(const std::string& bytes, const std::string& path) {
     zs.avail_out = sizeof(buffer);
     ret = inflate(&zs, Z_NO_FLUSH);
     if (ret != Z_OK && ret != Z_STREAM_END) break;
-    out.append(buffer, sizeof(buffer) - zs.avail_out);
-    if (out.size() > g_max_decompressed_bytes) {
+    try {
+      out.append(buffer, sizeof(buffer) - zs.avail_out);
+    } catch (const std::bad_alloc&) {
       inflateEnd(&zs);
+      fail(path, "not enough memory to decompress it (" + fmt_size(out.size()) + " so far)", "free memory or give the file uncompressed");
+    }
+    if (!bounded && out.size() >= 540) {
+      bounded = true;
+      const long double declared = declared_image_bytes(out);
+      if (declared > 0 && declared < limit) limit = declared;
+    }
+    if (static_cast<long double>(out.size()) > limit) {
+      inflateEnd(&zs);
+      if (limit < static_cast<long double>(g_max_decompressed_bytes))
+        fail(path, "decompresses to more than the " + fmt_size(static_cast<std::size_t>(limit)) + " its image header declares",
+             "the gzip stream is corrupt or a decompression bomb; re-create the file");
       fail(path, "decompresses to more than " + fmt_size(g_max_decompressed_bytes), "the gzip stream is not a plausible image");
     }
     if (ret == Z_STREAM_END) {
@@ -138,6 +200,57 @@ std::string BigEndianReader::line(std::size_t max_length, const char* what) {
 
 void BigEndianReader::fail(const std::string& problem, const std::string& hint) const { detail::fail(path_, problem, hint); }
 
+namespace {
+
+constexpr int kSignalSlots = 32;
+constexpr std::size_t kSignalPathMax = 4096;
+char g_signal_paths[kSignalSlots][kSignalPathMax];
+volatile std::sig_atomic_t g_signal_used[kSignalSlots];
+std::mutex g_signal_mutex;
+
+extern "C" void remove_on_signal_handler(int sig) {
+  // Only async-signal-safe calls here: unlink, signal, raise.
+  for (int i = 0; i < kSignalSlots; ++i)
+    if (g_signal_used[i]) ::unlink(g_signal_paths[i]);
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+void install_signal_handlers_once() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    for (int sig : {SIGTERM, SIGINT, SIGHUP}) {
+      struct sigaction old {};
+      if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler != SIG_DFL) continue;  // keep a caller's handler
+      struct sigaction sa {};
+      sa.sa_handler = remove_on_signal_handler;
+      sigemptyset(&sa.sa_mask);
+      ::sigaction(sig, &sa, nullptr);
+    }
+  });
+}
+
+}  // namespace
+
+RemoveOnSignal::RemoveOnSignal(const std::string& path) {
+  if (path.size() >= kSignalPathMax) return;
+  install_signal_handlers_once();
+  std::lock_guard<std::mutex> lock(g_signal_mutex);
+  for (int i = 0; i < kSignalSlots; ++i)
+    if (!g_signal_used[i]) {
+      std::memcpy(g_signal_paths[i], path.c_str(), path.size() + 1);
+      g_signal_used[i] = 1;  // published after the path is complete
+      slot_ = i;
+      return;
+    }
+}
+
+RemoveOnSignal::~RemoveOnSignal() {
+  if (slot_ < 0) return;
+  std::lock_guard<std::mutex> lock(g_signal_mutex);
+  g_signal_used[slot_] = 0;
+}
+
 TempFile::TempFile(const std::string& suffix) {
   const std::string folder = std::filesystem::temp_directory_path().string();
   std::string pattern = folder + "/authalic-XXXXXX" + suffix;
@@ -147,6 +260,7 @@ TempFile::TempFile(const std::string& suffix) {
   if (fd < 0) throw std::runtime_error("cannot create a temporary file in " + folder + ": " + std::strerror(errno));
   ::close(fd);
   path_ = buf.data();
+  on_signal_ = std::make_unique<RemoveOnSignal>(path_);
 }
 
 TempFile::~TempFile() { ::unlink(path_.c_str()); }

@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <utility>
 
@@ -118,6 +119,33 @@ class BigEndianWriter {
 
 // A private temporary file in the system temp folder (name ends with `suffix`), removed when
 // the object goes out of scope. Used to hand decompressed data to file-only C libraries.
+// A T stored at byte `at` of `bytes` (the caller checked the size), byte-swapped when `swap`:
+// header fields of either endianness (NIfTI, MGH).
+template <class T>
+T field_at(const std::string& bytes, std::size_t at, bool swap) {
+  T v;
+  std::memcpy(&v, bytes.data() + at, sizeof(T));
+  if (swap) {
+    auto* b = reinterpret_cast<unsigned char*>(&v);
+    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
+  }
+  return v;
+}
+
+// While alive, `path` is unlinked if the process gets SIGTERM, SIGINT or SIGHUP (the signal then
+// ends the process as before): temporary files and half-written outputs do not outlive a killed
+// run. At most 32 at once; beyond that a file is simply not covered.
+class RemoveOnSignal {
+ public:
+  explicit RemoveOnSignal(const std::string& path);
+  ~RemoveOnSignal();
+  RemoveOnSignal(const RemoveOnSignal&) = delete;
+  RemoveOnSignal& operator=(const RemoveOnSignal&) = delete;
+
+ private:
+  int slot_ = -1;
+};
+
 class TempFile {
  public:
   explicit TempFile(const std::string& suffix);
@@ -130,6 +158,7 @@ class TempFile {
 
  private:
   std::string path_;
+  std::unique_ptr<RemoveOnSignal> on_signal_;
 };
 
 // Quick number formatting for messages.

@@ -4,6 +4,7 @@
 // uses RAS, so x and y flip sign: RAS = diag(-1, -1, 1) * LPS.
 #include "io/itk_dicom.h"
 
+#include <gdcmTrace.h>
 #include <gdcmUIDGenerator.h>
 #include <itkGDCMImageIO.h>
 #include <itkGDCMSeriesFileNames.h>
@@ -57,6 +58,12 @@ bool itk_is_dicom_directory(const std::string& directory) {
 }
 
 DicomSeries itk_read_dicom_series(const std::string& directory) {
+  // GDCM and ITK print their warnings (private tags, odd spacing) on stderr before our one-line
+  // error; what matters reaches the user through the exceptions caught below.
+  gdcm::Trace::WarningOff();
+  gdcm::Trace::DebugOff();
+  gdcm::Trace::ErrorOff();
+  itk::Object::GlobalWarningDisplayOff();
   DicomSeries out;
   std::vector<std::string> files;
   try {

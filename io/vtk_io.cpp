@@ -9,6 +9,7 @@
 #include <vtkNew.h>
 #include <vtkOBJReader.h>
 #include <vtkOBJWriter.h>
+#include <vtkOutputWindow.h>
 #include <vtkPLYReader.h>
 #include <vtkPLYWriter.h>
 #include <vtkPoints.h>
@@ -22,39 +23,88 @@
 #include <vtkXMLPolyDataWriter.h>
 
 #include <array>
+#include <cmath>
 #include <map>
+#include <mutex>
 #include <system_error>
 #include <vector>
 
 #include "io/atomic_file.h"
 #include "io/io_internal.h"
 #include "io/surface_formats.h"
+#include "io/vtk_family_check.h"
 
 namespace authalic::io::detail {
 
 namespace {
 
 // vtkErrorCode's enum only (its string table lives in VTK::CommonMisc, which we do not link).
-// Collects VTK error/warning messages of one algorithm instead of printing them.
+
+// "vtkPLYReader (0x1234): Cannot read geometry" from VTK's "ERROR: In file, line N\n..." text.
+std::string readable_vtk_message(const char* text) {
+  std::string msg;
+  std::size_t start = 0;
+  const std::string all = text ? text : "";
+  while (start < all.size()) {
+    std::size_t end = all.find_first_of("\r\n", start);
+    if (end == std::string::npos) end = all.size();
+    const std::string line = all.substr(start, end - start);
+    start = end + 1;
+    if (line.empty() || line.rfind("ERROR: In ", 0) == 0 || line.find("Warning: In ") != std::string::npos) continue;
+    msg = line;
+    break;
+  }
+  // Drop the "ClassName (0x55d0...): " prefix: the address means nothing to a user.
+  const std::size_t paren = msg.find(" (0x");
+  const std::size_t colon = msg.find("): ", paren == std::string::npos ? 0 : paren);
+  if (paren != std::string::npos && colon != std::string::npos) msg = msg.substr(0, paren) + ": " + msg.substr(colon + 3);
+  return msg.substr(0, 300);
+}
+
+struct ErrorCollector;
+// The collector of the read running on this thread: VTK helper objects without an observer
+// (parsers, arrays) and generic warnings report through the global output window instead.
+thread_local ErrorCollector* t_active_collector = nullptr;
+
+// Collects VTK error/warning messages of one algorithm (and of anything reporting through the
+// output window on this thread meanwhile) instead of printing them.
 struct ErrorCollector {
   std::string messages;
   vtkNew<vtkCallbackCommand> callback;
+  ErrorCollector* previous = t_active_collector;
+  void record(const char* text) {
+    if (messages.empty()) messages = readable_vtk_message(text);
+    if (messages.empty()) messages = "unspecified VTK error";
+  }
   explicit ErrorCollector(vtkObject* object) {
     callback->SetClientData(this);
-    callback->SetCallback([](vtkObject*, unsigned long event, void* client, void* call) {
-      auto* self = static_cast<ErrorCollector*>(client);
-      if (event == vtkCommand::ErrorEvent && call) {
-        std::string msg = static_cast<const char*>(call);
-        // Keep the first line only: messages end up in a one-line InputError.
-        const std::size_t nl = msg.find_first_of("\r\n");
-        if (nl != std::string::npos) msg = msg.substr(0, nl);
-        if (self->messages.empty()) self->messages = msg;
-      }
+    callback->SetCallback([](vtkObject*, unsigned long, void* client, void* call) {
+      static_cast<ErrorCollector*>(client)->record(static_cast<const char*>(call));
     });
     object->AddObserver(vtkCommand::ErrorEvent, callback);
     object->AddObserver(vtkCommand::WarningEvent, callback);
+    t_active_collector = this;
   }
+  ~ErrorCollector() { t_active_collector = previous; }
+  ErrorCollector(const ErrorCollector&) = delete;
+  ErrorCollector& operator=(const ErrorCollector&) = delete;
 };
+
+// Once per process: VTK's output window never prints (a corrupt file once printed a warning per
+// missing vertex), and what reaches it counts as a failure of the read running on that thread.
+void silence_vtk_output() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    vtkOutputWindow* window = vtkOutputWindow::GetInstance();
+    window->SetDisplayModeToNever();
+    vtkNew<vtkCallbackCommand> relay;
+    relay->SetCallback([](vtkObject*, unsigned long, void*, void* call) {
+      if (t_active_collector) t_active_collector->record(static_cast<const char*>(call));
+    });
+    window->AddObserver(vtkCommand::ErrorEvent, relay);
+    window->AddObserver(vtkCommand::WarningEvent, relay);
+  });
+}
 
 TriMesh from_polydata(vtkPolyData* pd, const std::string& path) {
   TriMesh m;
@@ -112,17 +162,26 @@ vtkSmartPointer<vtkPolyData> to_polydata(const TriMesh& mesh) {
   return pd;
 }
 
+// Reads `file` (the user's file or a sanitized copy of it); messages name `path`.
 template <class Reader>
-TriMesh run_reader(const std::string& path, const std::string& format) {
+TriMesh run_reader(const std::string& file, const std::string& path, const std::string& format) {
+  silence_vtk_output();
   vtkNew<Reader> reader;
-  ErrorCollector errors(reader);
-  reader->SetFileName(path.c_str());
-  reader->Update();
-  if (!errors.messages.empty() || reader->GetErrorCode() != vtkErrorCode::NoError) {
-    const std::string why = errors.messages.empty() ? "VTK error code " + std::to_string(reader->GetErrorCode()) : errors.messages;
-    fail(path, "VTK could not read it as " + format + ": " + why, "the file is corrupt or not " + format);
+  TriMesh mesh;
+  {
+    ErrorCollector errors(reader);
+    reader->SetFileName(file.c_str());
+    reader->Update();
+    if (!errors.messages.empty() || reader->GetErrorCode() != vtkErrorCode::NoError) {
+      const std::string why = errors.messages.empty() ? "VTK error code " + std::to_string(reader->GetErrorCode()) : errors.messages;
+      fail(path, "VTK could not read it as " + format + ": " + why, "the file is corrupt or not " + format);
+    }
+    mesh = from_polydata(reader->GetOutput(), path);
   }
-  return from_polydata(reader->GetOutput(), path);
+  for (Eigen::Index i = 0; i < mesh.V.rows(); ++i)
+    if (!mesh.V.row(i).allFinite())
+      fail(path, "vertex " + std::to_string(i) + " has a non-finite coordinate (NaN or Inf)", "the " + format + " file is corrupt; re-create it");
+  return mesh;
 }
 
 }  // namespace
@@ -130,16 +189,27 @@ TriMesh run_reader(const std::string& path, const std::string& format) {
 TriMesh read_vtk_family(const std::string& path, const std::string& format) {
   require_readable(path);
   if (format == "vtk") {
-    vtkNew<vtkPolyDataReader> probe;
-    probe->SetFileName(path.c_str());
-    if (!probe->IsFilePolyData())
-      fail(path, "legacy VTK file does not hold POLYDATA (e.g. an unstructured grid)", "convert it to a polygonal surface");
-    return run_reader<vtkPolyDataReader>(path, "legacy VTK");
+    // VTK reads a geometry-only copy whose every declared size has been checked.
+    const TempFile copy(".vtk");
+    copy.write(sanitize_legacy_vtk(read_file(path), path));
+    return run_reader<vtkPolyDataReader>(copy.path(), path, "legacy VTK");
   }
-  if (format == "vtp") return run_reader<vtkXMLPolyDataReader>(path, "VTK XML PolyData");
-  if (format == "ply") return run_reader<vtkPLYReader>(path, "PLY");
-  if (format == "obj") return run_reader<vtkOBJReader>(path, "OBJ");
-  if (format == "stl") return run_reader<vtkSTLReader>(path, "STL");
+  if (format == "vtp") {
+    check_vtp(read_file(path), path);
+    return run_reader<vtkXMLPolyDataReader>(path, path, "VTK XML PolyData");
+  }
+  if (format == "ply") {
+    check_ply(read_file(path), path);
+    return run_reader<vtkPLYReader>(path, path, "PLY");
+  }
+  if (format == "obj") {
+    check_obj(read_file(path), path);
+    return run_reader<vtkOBJReader>(path, path, "OBJ");
+  }
+  if (format == "stl") {
+    check_stl(read_file(path), path);
+    return run_reader<vtkSTLReader>(path, path, "STL");
+  }
   fail(path, "unknown VTK-family format '" + format + "'", "use .vtk, .vtp, .ply, .obj or .stl");
 }
 
@@ -167,6 +237,7 @@ namespace {
 
 template <class Writer, class Configure>
 void run_writer(vtkPolyData* pd, const std::string& tmp, const std::string& format, Configure configure) {
+  silence_vtk_output();
   vtkNew<Writer> writer;
   ErrorCollector errors(writer);
   configure(writer.GetPointer());

@@ -179,7 +179,16 @@ TEST(Sampling, GlobalAndReferenceRegionNormalisation) {
   const VectorXd area = barycentric_vertex_areas(m.V, m.F);
   EXPECT_NEAR(area.dot(values) / area.sum(), 1.0, 1e-12);
   VectorXd zeros = VectorXd::Zero(m.V.rows());
-  EXPECT_THROW(global_cortical_mean(zeros, m.V, m.F), ProcessingError);
+  EXPECT_THROW(global_cortical_mean(zeros, m.V, m.F), InputError);  // bad input: exit 2
+  // Noise around zero: the mean is small against the values' magnitude (issue 17).
+  VectorXd noise(m.V.rows());
+  for (Eigen::Index v = 0; v < noise.size(); ++v) noise[v] = 0.02 + std::sin(12.9898 * static_cast<double>(v));
+  try {
+    global_cortical_mean(noise, m.V, m.F);
+    FAIL() << "noise around zero was normalised";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("mostly noise around zero"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Sampling, AffineTextParsing) {

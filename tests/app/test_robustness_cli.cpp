@@ -23,12 +23,7 @@ namespace fs = std::filesystem;
 namespace authalic {
 namespace {
 
-// Single-quoted for sh, inner single quotes escaped.
-std::string q(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
+std::string q(const std::string& s) { return test::shell_quote(s); }
 std::string bin() { return q(test::authalic_binary()); }
 
 std::vector<std::string> files_in(const std::string& dir) {

@@ -45,4 +45,10 @@ int run_command(const std::string& command, std::string* output) {
 
 std::string authalic_binary() { return AUTHALIC_BINARY; }
 
+std::string shell_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
 }  // namespace authalic::test

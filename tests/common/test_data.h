@@ -17,6 +17,8 @@ std::string temp_dir(const std::string& name);
 int run_command(const std::string& command, std::string* output = nullptr);
 // The built `authalic` executable.
 std::string authalic_binary();
+// `s` single-quoted for sh (inner single quotes escaped), for building command lines.
+std::string shell_quote(const std::string& s);
 
 }  // namespace authalic::test
 

@@ -1,7 +1,9 @@
 // Writes the seed corpus for the fuzz targets: small valid files from the project's own writers,
 // one folder per target (scripts/fuzz.sh calls it before fuzzing).
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <string>
 
 #include "io/surface_io.h"
 #include "io/volume_io.h"
@@ -15,7 +17,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::filesystem::path root(argv[1]);
-  for (const char* t : {"freesurfer_surface", "freesurfer_curv", "freesurfer_label", "freesurfer_patch", "gifti", "nifti", "mgh"})
+  for (const char* t : {"freesurfer_surface", "freesurfer_curv", "freesurfer_label", "freesurfer_patch", "gifti", "nifti", "mgh", "ply", "obj", "stl", "vtk"})
     std::filesystem::create_directories(root / t);
   auto at = [&](const char* target, const char* name) { return (root / target / name).string(); };
 
@@ -59,6 +61,36 @@ int main(int argc, char** argv) {
   write_nifti(at("nifti", "v.nii"), v);
   write_mgh(at("mgh", "v.mgh"), v);
   write_mgh(at("mgh", "v.mgz"), v);
+  // VTK family: the writers make binary PLY/STL/VTK and appended VTP; ASCII variants by hand.
+  // fuzz_vtk reads its first byte as the format switch: 'v' (even) is .vtk, 'w' (odd) is .vtp.
+  write_surface(at("ply", "w.ply"), m);
+  write_surface(at("obj", "w.obj"), m);
+  write_surface(at("stl", "w.stl"), m);
+  auto text = [&](const std::string& file, const std::string& bytes) { std::ofstream(file, std::ios::binary) << bytes; };
+  auto prefixed = [&](const std::string& from, const std::string& to, char format) {
+    std::ifstream in(from, std::ios::binary);
+    text(to, std::string(1, format) + std::string(std::istreambuf_iterator<char>(in), {}));
+    std::filesystem::remove(from);
+  };
+  write_surface(at("vtk", "tmp.vtk"), m);
+  prefixed(at("vtk", "tmp.vtk"), at("vtk", "w_vtk"), 'v');
+  write_surface(at("vtk", "tmp.vtp"), m);
+  prefixed(at("vtk", "tmp.vtp"), at("vtk", "w_vtp"), 'w');
+  const std::string tri = "0 0 0\n1.5 0 0\n0 2.5 0\n";
+  text(at("ply", "a.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                           "element face 1\nproperty list uchar int vertex_indices\nend_header\n" + tri + "3 0 1 2\n");
+  text(at("obj", "a.obj"), "# c\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1\nf -3 -2 -1\n");
+  text(at("stl", "a.stl"), "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid x\n");
+  text(at("vtk", "a3_vtk"), "v# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 1 1 0\n"
+                            "POLYGONS 1 5\n4 0 1 3 2\nTRIANGLE_STRIPS 1 4\n3 0 1 2\nPOINT_DATA 4\nSCALARS s float 1\nLOOKUP_TABLE default\n1 2 3 4\n");
+  text(at("vtk", "a5_vtk"), "v# vtk DataFile Version 5.1\nx\nASCII\nDATASET POLYDATA\nFIELD FieldData 1\nTIME 1 1 double\n7\n"
+                            "POINTS 3 float\n" + tri + "METADATA\nINFORMATION 0\n\nPOLYGONS 2 3\nOFFSETS vtktypeint64\n0 3\n"
+                            "CONNECTIVITY vtktypeint64\n0 1 2\n");
+  text(at("vtk", "a_vtp"), "w<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\" header_type=\"UInt32\">\n"
+                           "<PolyData>\n<Piece NumberOfPoints=\"3\" NumberOfPolys=\"1\">\n<Points>\n"
+                           "<DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">\n" + tri + "</DataArray>\n</Points>\n"
+                           "<Polys>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">0 1 2</DataArray>\n"
+                           "<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">3</DataArray>\n</Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n");
   std::cout << "seeds written to " << root.string() << "\n";
   return 0;
 }

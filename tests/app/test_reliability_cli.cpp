@@ -1,0 +1,498 @@
+// Reliability of the command line (issue 17): outputs never destroy an input or a special file,
+// two runs on one subject folder cannot race, numeric options are bounded, degenerate normative
+// references and implausible anatomy are refused, `group` validates ids and takes its children
+// with it when killed. Every refusal: exit 2, one line naming the path, inputs unchanged.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "analysis/elements.h"
+#include "analysis/normative.h"
+#include "common/hard_meshes.h"
+#include "common/test_data.h"
+#include "io/checksum.h"
+#include "io/surface_io.h"
+#include "io/volume_io.h"
+
+namespace fs = std::filesystem;
+
+namespace authalic {
+namespace {
+
+std::string q(const std::string& s) { return test::shell_quote(s); }
+std::string bin() { return q(test::authalic_binary()); }
+std::string sample(const std::string& relative) { return std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/" + relative; }
+
+int lines_of(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+// Runs `command`, expects exit 2 with `expected` in its one-line message, and every file in
+// `kept` byte-identical afterwards.
+void expect_refused(const std::string& command, const std::string& expected, const std::vector<std::string>& kept) {
+  std::vector<std::string> before;
+  for (const auto& f : kept) before.push_back(io::sha256_file(f));
+  std::string out;
+  EXPECT_EQ(test::run_command(command, &out), 2) << command << "\n" << out;
+  EXPECT_NE(out.find(expected), std::string::npos) << command << "\n" << out;
+  EXPECT_EQ(lines_of(out), 1) << out;
+  for (std::size_t i = 0; i < kept.size(); ++i) EXPECT_EQ(io::sha256_file(kept[i]), before[i]) << kept[i] << " changed";
+}
+
+std::string write_patch(const std::string& dir) {
+  const std::string path = dir + "/patch.surf.gii";
+  io::write_surface(path, test::folded_patch(12));
+  return path;
+}
+
+std::string run_args(const std::string& out, const std::string& pet = sample("sub-patient01/sub-patient01_pet.nii.gz")) {
+  return bin() + " run --id patient01 --lh-white " + q(sample("surf/lh.white")) + " --lh-pial " + q(sample("surf/lh.pial")) +
+         " --rh-white " + q(sample("surf/rh.white")) + " --rh-pial " + q(sample("surf/rh.pial")) + " --lh-cortex " +
+         q(sample("label/lh.cortex.label")) + " --rh-cortex " + q(sample("label/rh.cortex.label")) + " --pet " + q(pet) +
+         " --out " + q(out) + " --quiet";
+}
+
+// ---- 1. special files and symlinks as outputs ---------------------------------------------------
+
+TEST(ReliabilityCli, OutputThatIsNotARegularFileIsRefusedAndLeftAsItIs) {
+  const std::string dir = test::temp_dir("rel-special");
+  const std::string patch = write_patch(dir);
+  const std::string fifo = dir + "/pipe.surf.gii";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  expect_refused(bin() + " flatten " + q(patch) + " " + q(fifo), "a FIFO (named pipe), not a regular file", {patch});
+  struct stat st {};
+  ASSERT_EQ(::lstat(fifo.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode)) << "the FIFO was replaced";
+  // A device node (a private copy of /dev/null's numbers, made only when we may: as root).
+  const std::string dev = dir + "/null.surf.gii";
+  if (::mknod(dev.c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0) {
+    expect_refused(bin() + " flatten " + q(patch) + " " + q(dev), "a character device", {patch});
+    ASSERT_EQ(::lstat(dev.c_str(), &st), 0);
+    EXPECT_TRUE(S_ISCHR(st.st_mode)) << "the device node was replaced";
+  }
+  // A folder, and a missing folder: refused before any computing.
+  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir), "is a folder", {patch});
+  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/no/such/out.surf.gii"), "does not exist; create it first", {patch});
+}
+
+TEST(ReliabilityCli, SymlinkOutputIsWrittenThroughAndADanglingOneRefused) {
+  const std::string dir = test::temp_dir("rel-symlink");
+  const std::string patch = write_patch(dir);
+  const std::string target = dir + "/target.surf.gii", link = dir + "/link.surf.gii";
+  { std::ofstream(target) << "old"; }
+  fs::create_symlink(target, link);
+  std::string out;
+  ASSERT_EQ(test::run_command(bin() + " flatten " + q(patch) + " " + q(link) + " --quiet", &out), 0) << out;
+  EXPECT_TRUE(fs::is_symlink(link)) << "the link was replaced by a file";
+  EXPECT_GT(fs::file_size(target), 100u) << "the link's target did not get the map";
+  EXPECT_GE(io::read_surface(link).mesh.num_vertices(), io::read_surface(patch).mesh.num_vertices());
+  fs::create_symlink(dir + "/missing.surf.gii", dir + "/dangling.surf.gii");
+  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/dangling.surf.gii"), "symlink to a missing file", {patch});
+}
+
+analysis::ElementTable control(const std::string& id, double value) {
+  analysis::ElementTable t;
+  t.grid = analysis::element_grid(analysis::ElementDomain::Square, 2);
+  t.subject_id = id;
+  t.units = "ratio";
+  analysis::ElementBlock b;
+  b.hemisphere = "left";
+  for (int e = 0; e < 4; ++e) {
+    analysis::Element el;
+    el.id = e;
+    el.row = e / 2;
+    el.col = e % 2;
+    el.area_mm2 = 10;
+    el.value = value + 0.01 * e;
+    el.n_vertices = 5;
+    b.elements.push_back(el);
+  }
+  t.blocks.push_back(b);
+  return t;
+}
+
+// ---- 2. an output that is an input --------------------------------------------------------------
+
+TEST(ReliabilityCli, EveryCommandRefusesToWriteOverItsInput) {
+  const std::string dir = test::temp_dir("rel-same");
+  const std::string patch = write_patch(dir);
+  const std::string sphere = dir + "/ball.surf.gii";
+  io::write_surface(sphere, test::icosphere(2));
+  const std::string hard = dir + "/hard.surf.gii";
+  fs::create_hard_link(patch, hard);
+  const std::string same = "is also an input";
+  expect_refused(bin() + " flatten " + q(patch) + " " + q(patch), same, {patch});
+  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/o.surf.gii") + " --uv " + q(patch), same, {patch});
+  expect_refused(bin() + " flatten " + q(patch) + " " + q(hard), same, {patch});  // a hard link: same inode
+  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/../" + fs::path(dir).filename().string() + "/patch.surf.gii"), same, {patch});
+  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/o.surf.gii") + " --uv " + q(dir + "/o.surf.gii"),
+                 "is given twice as an output", {patch});
+  expect_refused(bin() + " subdivide " + q(patch) + " " + q(patch), same, {patch});
+  expect_refused(bin() + " sphere " + q(sphere) + " " + q(sphere), same, {sphere});
+  expect_refused(bin() + " render " + q(patch) + " " + q(patch), same, {patch});
+  const std::string pet = dir + "/pet.nii.gz";
+  fs::copy_file(sample("sub-patient01/sub-patient01_pet.nii.gz"), pet);
+  expect_refused(bin() + " sample " + q(pet) + " " + q(sample("surf/lh.pial")) + " " + q(pet), same, {pet});
+  // elements: PREFIX.csv would be the values file.
+  const std::string values = dir + "/v.csv";
+  { std::ofstream(values) << "1\n"; }
+  expect_refused(bin() + " elements " + q(patch) + " " + q(patch) + " " + q(values) + " " + q(dir + "/v"), same, {values});
+  // normative build T1 T1 T2: the first control's table as the output (and its sidecar).
+  std::vector<std::string> tables;
+  for (int s = 0; s < 3; ++s) {
+    tables.push_back(dir + "/c" + std::to_string(s) + "_elements.csv");
+    analysis::write_element_table(tables.back(), control("c" + std::to_string(s), 1.0 + 0.1 * s));
+  }
+  const std::string& t1 = tables[0];
+  const std::string t1_sidecar = analysis::element_sidecar_path(t1);
+  expect_refused(bin() + " normative build " + q(t1) + " " + q(t1) + " " + q(tables[1]) + " " + q(tables[2]), same, {t1, t1_sidecar});
+  expect_refused(bin() + " normative build " + q(t1_sidecar) + " " + q(t1) + " " + q(tables[1]) + " " + q(tables[2]), same, {t1, t1_sidecar});
+  // compare REF PATIENT PREFIX with PREFIX.json = REF.
+  const std::string ref = dir + "/ref.json";
+  std::string out;
+  ASSERT_EQ(test::run_command(bin() + " normative build " + q(ref) + " " + q(tables[0]) + " " + q(tables[1]) + " " + q(tables[2]) + " --quiet", &out), 0) << out;
+  const std::string patient = dir + "/p_elements.csv";
+  analysis::write_element_table(patient, control("p", 0.8));
+  expect_refused(bin() + " normative compare " + q(ref) + " " + q(patient) + " " + q(dir + "/ref"), same, {ref, patient});
+}
+
+TEST(ReliabilityCli, RunRefusesInputsInsideTheFolderForceWouldReplace) {
+  const std::string dir = test::temp_dir("rel-force");
+  const std::string subject = dir + "/out/sub-patient01";
+  fs::create_directories(subject);
+  const std::string pet = subject + "/pet.nii.gz";
+  fs::copy_file(sample("sub-patient01/sub-patient01_pet.nii.gz"), pet);
+  expect_refused(run_args(dir + "/out", pet) + " --force", "lies inside " + subject, {pet});
+  EXPECT_TRUE(fs::exists(pet));
+}
+
+// ---- 4. two runs on one subject folder ------------------------------------------------------------
+
+TEST(ReliabilityCli, ASecondRunOnTheSameSubjectFolderIsRefusedWhileTheFirstRuns) {
+  const std::string dir = test::temp_dir("rel-lock");
+  const std::string out = dir + "/out";
+  // A killed run's staging folder: removed by the next run on that subject.
+  fs::create_directories(out + "/.sub-patient01.partial-999999/x");
+  const pid_t first = ::fork();
+  ASSERT_GE(first, 0);
+  if (first == 0) {
+    ::execl("/bin/sh", "sh", "-c", (run_args(out) + " > " + q(dir + "/first.log") + " 2>&1").c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const std::string lock = out + "/.sub-patient01.lock";
+  for (int i = 0; i < 200 && !fs::exists(lock); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  ASSERT_TRUE(fs::exists(lock)) << "the first run did not take its lock";
+  std::string log;
+  EXPECT_EQ(test::run_command(run_args(out) + " --force", &log), 2) << log;
+  EXPECT_NE(log.find("another authalic process is writing it now"), std::string::npos) << log;
+  int status = 0;
+  ASSERT_EQ(::waitpid(first, &status, 0), first);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  EXPECT_TRUE(fs::exists(out + "/sub-patient01/report.html"));
+  EXPECT_FALSE(fs::exists(lock)) << "the lock file was left behind";
+  EXPECT_FALSE(fs::exists(out + "/.sub-patient01.partial-999999")) << "a dead run's staging folder was left";
+  // The finished folder is not replaced without --force, under the lock as before.
+  EXPECT_EQ(test::run_command(run_args(out), &log), 2) << log;
+  EXPECT_NE(log.find("output folder exists"), std::string::npos) << log;
+}
+
+// ---- 5, 8, 13: bounded numbers ------------------------------------------------------------------
+
+TEST(ReliabilityCli, NumericOptionsOutsideTheirRangeAreRefused) {
+  const std::string dir = test::temp_dir("rel-numbers");
+  const std::string patch = write_patch(dir);
+  const std::string pet = sample("sub-patient01/sub-patient01_pet.nii.gz"), pial = sample("surf/lh.pial");
+  std::string out;
+  for (const std::string step : {"1e-9", "1e-6", "0", "-1", "nan"}) {
+    EXPECT_EQ(test::run_command(bin() + " sample " + q(pet) + " " + q(pial) + " " + q(dir + "/s.func.gii") + " --step " + step, &out), 2)
+        << step << ": " << out;
+    EXPECT_FALSE(fs::exists(dir + "/s.func.gii"));
+  }
+  EXPECT_EQ(test::run_command(bin() + " flatten " + q(patch) + " " + q(dir + "/o.surf.gii") + " --threads 100000", &out), 2) << out;
+  EXPECT_NE(out.find("--threads"), std::string::npos) << out;
+  for (const std::string age : {"7O", "nan", "-inf", "-5", "200"}) {
+    EXPECT_EQ(test::run_command(run_args(dir + "/run") + " --age " + age, &out), 2) << age << ": " << out;
+    EXPECT_NE(out.find("--age"), std::string::npos) << out;
+  }
+  EXPECT_FALSE(fs::exists(dir + "/run"));
+}
+
+// ---- 6. degenerate normative references --------------------------------------------------------
+
+TEST(ReliabilityCli, DegenerateNormativeReferencesAreRefusedNotReadAsNormal) {
+  const std::string dir = test::temp_dir("rel-normative");
+  auto table = [&](const std::string& id, double value) {
+    const std::string p = dir + "/" + id + "_elements.csv";
+    analysis::write_element_table(p, control(id, value));
+    return p;
+  };
+  const std::string c1 = table("c1", 1.0), c2 = table("c2", 1.1), c3 = table("c3", 0.9);
+  const std::string same1 = table("s1", 1.0), same2 = table("s2", 1.0), same3 = table("s3", 1.0);
+  const std::string huge = table("h1", 1e308);
+  std::string out;
+  // Fewer than 3 controls.
+  EXPECT_EQ(test::run_command(bin() + " normative build " + q(dir + "/two.json") + " " + q(c1) + " " + q(c2), &out), 2) << out;
+  EXPECT_NE(out.find("needs at least 3"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/two.json"));
+  // SD 0 everywhere.
+  EXPECT_EQ(test::run_command(bin() + " normative build " + q(dir + "/flat.json") + " " + q(same1) + " " + q(same2) + " " + q(same3), &out), 2) << out;
+  EXPECT_NE(out.find("SD > 0"), std::string::npos) << out;
+  // 1e308: refused at build, not written as a reference the next command refuses.
+  EXPECT_EQ(test::run_command(bin() + " normative build " + q(dir + "/huge.json") + " " + q(c1) + " " + q(c2) + " " + q(huge), &out), 2) << out;
+  EXPECT_NE(out.find("not a plausible PET value"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/huge.json"));
+  // A one-control reference made by the library (as an older version or another tool could):
+  // compare says it cannot compare instead of "0 elements compared, 0 clusters".
+  analysis::NormativeReference one = analysis::empty_reference_like(control("c1", 1.0));
+  analysis::add_subject(one, control("c1", 1.0), c1);
+  analysis::write_reference(dir + "/one.json", one);
+  EXPECT_EQ(test::run_command(bin() + " normative compare " + q(dir + "/one.json") + " " + q(c2) + " " + q(dir + "/cmp"), &out), 2) << out;
+  EXPECT_NE(out.find("no element could be compared"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/cmp.json"));
+  // Three varying controls: fine.
+  EXPECT_EQ(test::run_command(bin() + " normative build " + q(dir + "/ok.json") + " " + q(c1) + " " + q(c2) + " " + q(c3) + " --quiet", &out), 0) << out;
+}
+
+// ---- 11. implausible anatomy ---------------------------------------------------------------------
+
+TEST(ReliabilityCli, SwappedWhiteAndPialOrLeftAndRightAreRefused) {
+  const std::string dir = test::temp_dir("rel-anatomy");
+  const std::string pet = q(sample("sub-patient01/sub-patient01_pet.nii.gz"));
+  const std::string cortex = " --lh-cortex " + q(sample("label/lh.cortex.label")) + " --rh-cortex " + q(sample("label/rh.cortex.label"));
+  std::string out;
+  // White and pial swapped in the left hemisphere.
+  EXPECT_EQ(test::run_command(bin() + " run --id x --lh-white " + q(sample("surf/lh.pial")) + " --lh-pial " + q(sample("surf/lh.white")) +
+                                  " --rh-white " + q(sample("surf/rh.white")) + " --rh-pial " + q(sample("surf/rh.pial")) + cortex +
+                                  " --pet " + pet + " --out " + q(dir + "/a"),
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("white and pial look swapped"), std::string::npos) << out;
+  // Left and right swapped.
+  EXPECT_EQ(test::run_command(bin() + " run --id x --lh-white " + q(sample("surf/rh.white")) + " --lh-pial " + q(sample("surf/rh.pial")) +
+                                  " --rh-white " + q(sample("surf/lh.white")) + " --rh-pial " + q(sample("surf/lh.pial")) + cortex +
+                                  " --pet " + pet + " --out " + q(dir + "/b"),
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("left and right look swapped"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/a"));
+  EXPECT_FALSE(fs::exists(dir + "/b"));
+}
+
+// ---- clearer errors: degenerate geometry in the cortex region -----------------------------------
+
+TEST(ReliabilityCli, DegenerateRegionGeometryIsNamedNotAFactorisationFailure) {
+  const std::string dir = test::temp_dir("rel-degenerate");
+  TriMesh m = test::folded_patch(12);
+  TriMesh zero = m;
+  zero.V.row(zero.F(0, 0)) = zero.V.row(zero.F(0, 1));  // two vertices at one point: zero-area faces
+  io::write_surface(dir + "/zero.surf.gii", zero);
+  TriMesh huge = m;
+  huge.V.row(5) *= 1e38;
+  io::write_surface(dir + "/huge.surf.gii", huge);
+  TriMesh point = m;
+  point.V.setZero();
+  io::write_surface(dir + "/point.surf.gii", point);
+  expect_refused(bin() + " flatten " + q(dir + "/zero.surf.gii") + " " + q(dir + "/o.surf.gii"), "are degenerate (zero area", {});
+  expect_refused(bin() + " flatten " + q(dir + "/huge.surf.gii") + " " + q(dir + "/o.surf.gii"), "not finite or beyond 1e6 mm", {});
+  expect_refused(bin() + " flatten " + q(dir + "/point.surf.gii") + " " + q(dir + "/o.surf.gii"), "collapsed to a point or a line", {});
+  EXPECT_FALSE(fs::exists(dir + "/o.surf.gii"));
+}
+
+// ---- SIGTERM while the PET is decompressed ----------------------------------------------------------
+
+TEST(ReliabilityCli, SigtermWhileReadingACompressedPetLeavesNoTemporaryFile) {
+  const std::string dir = test::temp_dir("rel-sigterm");
+  io::Volume big;
+  big.dims = {240, 240, 240};  // 55 MB of floats: the decompressed copy lives long enough to catch
+  big.vox2ras = Eigen::Matrix4d::Identity();
+  big.data.assign(static_cast<std::size_t>(240) * 240 * 240, 1.0f);
+  io::write_nifti(dir + "/big.nii.gz", big);
+  const std::string tmp = dir + "/tmp";
+  fs::create_directories(tmp);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::setenv("TMPDIR", tmp.c_str(), 1);
+    ::execl(test::authalic_binary().c_str(), "authalic", "sample", (dir + "/big.nii.gz").c_str(), sample("surf/lh.pial").c_str(),
+            (dir + "/s.func.gii").c_str(), "--quiet", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  bool seen = false;
+  for (int i = 0; i < 4000 && !seen; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    seen = !fs::is_empty(tmp);
+  }
+  ::kill(child, SIGTERM);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(seen) << "the decompressed copy never appeared in TMPDIR";
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << "status " << status;
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(tmp)) left.push_back(e.path().filename().string());
+  EXPECT_TRUE(left.empty()) << "left in TMPDIR: " << (left.empty() ? "" : left[0]);
+  EXPECT_FALSE(fs::exists(dir + "/s.func.gii"));
+}
+
+// ---- clearer errors -----------------------------------------------------------------------------
+
+TEST(ReliabilityCli, ErrorsNameTheRealProblem) {
+  const std::string dir = test::temp_dir("rel-errors");
+  std::vector<std::string> tables;
+  for (int s = 0; s < 3; ++s) {
+    tables.push_back(dir + "/c" + std::to_string(s) + "_elements.csv");
+    analysis::write_element_table(tables.back(), control("c" + std::to_string(s), 1.0 + 0.1 * s));
+  }
+  const std::string ref = dir + "/normative.json";
+  std::string out;
+  ASSERT_EQ(test::run_command(bin() + " normative build " + q(ref) + " " + q(tables[0]) + " " + q(tables[1]) + " " + q(tables[2]) + " --quiet", &out), 0) << out;
+  // compare REF REF: the patient is not a table (was: "cannot read normative.json.json").
+  expect_refused(bin() + " normative compare " + q(ref) + " " + q(ref) + " " + q(dir + "/cmp"), "this looks like a JSON file", {ref});
+  // A reference whose k is corrupt blames the file, not "--k".
+  std::ifstream in(ref);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  const std::size_t at = text.find("\"k\": 2");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 6, "\"k\": 100000");
+  std::ofstream(dir + "/bad_k.json") << text;
+  expect_refused(bin() + " normative compare " + q(dir + "/bad_k.json") + " " + q(tables[0]) + " " + q(dir + "/cmp"),
+                 "bad_k.json: k = 100000 is outside 1..4096", {});
+  // A file name starting with '-'.
+  EXPECT_EQ(test::run_command(bin() + " subdivide -x.surf.gii y.surf.gii", &out), 2) << out;
+  EXPECT_NE(out.find("goes after '--'"), std::string::npos) << out;
+  EXPECT_EQ(lines_of(out), 1) << out;
+}
+
+// ---- 13. PET noise around zero ------------------------------------------------------------------
+
+TEST(ReliabilityCli, GlobalNormalisationOfNoiseAroundZeroIsRefused) {
+  const std::string dir = test::temp_dir("rel-noise");
+  io::Volume pet = io::read_volume(sample("sub-patient01/sub-patient01_pet.nii.gz"));
+  // Deterministic noise of SD ~0.7 around a mean of 0.02.
+  for (std::size_t i = 0; i < pet.data.size(); ++i) pet.data[i] = 0.02f + static_cast<float>(std::sin(12.9898 * static_cast<double>(i)));
+  io::write_nifti(dir + "/noise.nii.gz", pet);
+  std::string out;
+  EXPECT_EQ(test::run_command(bin() + " sample " + q(dir + "/noise.nii.gz") + " " + q(sample("surf/lh.pial")) + " " +
+                                  q(dir + "/s.func.gii") + " --normalize global",
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("mostly noise around zero"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/s.func.gii"));
+}
+
+// ---- 13. a 3D surface given as the map -------------------------------------------------------------
+
+TEST(ReliabilityCli, MetricsRefusesA3dSurfaceGivenAsTheMap) {
+  const std::string dir = test::temp_dir("rel-metrics");
+  const std::string patch = write_patch(dir);
+  std::string out;
+  EXPECT_EQ(test::run_command(bin() + " metrics " + q(sample("surf/lh.white")) + " " + q(sample("surf/lh.white")), &out), 2) << out;
+  EXPECT_NE(out.find("is not a flat map"), std::string::npos) << out;
+  EXPECT_EQ(test::run_command(bin() + " metrics " + q(sample("surf/lh.white")) + " " + q(sample("surf/lh.white")) + " --domain sphere", &out), 2) << out;
+  EXPECT_NE(out.find("is not a sphere map"), std::string::npos) << out;
+  // A real flat map still measures.
+  ASSERT_EQ(test::run_command(bin() + " flatten " + q(patch) + " " + q(dir + "/flat.surf.gii") + " --quiet", &out), 0) << out;
+  EXPECT_EQ(test::run_command(bin() + " metrics " + q(patch) + " " + q(dir + "/flat.surf.gii"), &out), 0) << out;
+}
+
+// ---- 7, 12: group ------------------------------------------------------------------------------
+
+// A cohort CSV beside the sample data, with the given rows after the header.
+std::string write_cohort(const std::string& dir, const std::vector<std::string>& rows) {
+  const std::string path = dir + "/cohort.csv";
+  std::ofstream c(path);
+  c << "subject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex\n";
+  const std::string files = "," + sample("surf/lh.white") + "," + sample("surf/lh.pial") + "," + sample("surf/rh.white") + "," +
+                            sample("surf/rh.pial") + "," + sample("label/lh.cortex.label") + "," + sample("label/rh.cortex.label");
+  for (const auto& r : rows) c << r << files << "\n";
+  return path;
+}
+
+TEST(ReliabilityCli, GroupValidatesIdsAndAgesBeforeAnyFile) {
+  const std::string dir = test::temp_dir("rel-group-ids");
+  const std::string pet = sample("sub-patient01/sub-patient01_pet.nii.gz");
+  std::string out;
+  const std::string bad = write_cohort(dir, {"../../escape,control,60," + pet});
+  EXPECT_EQ(test::run_command(bin() + " group " + q(bad) + " " + q(dir + "/g/out"), &out), 2) << out;
+  EXPECT_NE(out.find("letters and digits"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/g")) << "a folder was made before the id was checked";
+  EXPECT_FALSE(fs::exists(dir + "/escape.log"));
+  const std::string age = write_cohort(dir, {"c01,control,7O," + pet});
+  EXPECT_EQ(test::run_command(bin() + " group " + q(age) + " " + q(dir + "/g2"), &out), 2) << out;
+  EXPECT_NE(out.find("age '7O' is not a number"), std::string::npos) << out;
+}
+
+// Running (a zombie, reparented to an init that does not reap, counts as ended).
+bool process_alive(pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return false;
+  const std::size_t close = line.rfind(')');
+  return close != std::string::npos && close + 2 < line.size() && line[close + 2] != 'Z';
+}
+
+// The pids of `parent`'s children (from /proc).
+std::vector<pid_t> children_of(pid_t parent) {
+  std::vector<pid_t> out;
+  for (const auto& e : fs::directory_iterator("/proc")) {
+    const std::string name = e.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream stat(e.path() / "stat");
+    std::string line;
+    if (!std::getline(stat, line)) continue;
+    const std::size_t close = line.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(line.substr(close + 2));
+    char state = 0;
+    pid_t ppid = 0;
+    rest >> state >> ppid;
+    if (ppid == parent) out.push_back(static_cast<pid_t>(std::stoi(name)));
+  }
+  return out;
+}
+
+TEST(ReliabilityCli, KilledGroupTakesItsRunningSubjectsWithIt) {
+  const std::string dir = test::temp_dir("rel-group-kill");
+  const std::string pet = sample("sub-patient01/sub-patient01_pet.nii.gz");
+  const std::string cohort = write_cohort(dir, {"c01,control,60," + pet, "c02,control,61," + pet});
+  const pid_t group = ::fork();
+  ASSERT_GE(group, 0);
+  if (group == 0) {
+    ::execl(test::authalic_binary().c_str(), "authalic", "group", cohort.c_str(), (dir + "/out").c_str(), "--jobs", "2", "--quiet",
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  std::vector<pid_t> kids;
+  for (int i = 0; i < 200 && kids.size() < 2; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    kids = children_of(group);
+  }
+  ASSERT_FALSE(kids.empty()) << "group started no child";
+  ::kill(group, SIGKILL);
+  int status = 0;
+  ::waitpid(group, &status, 0);
+  bool any_alive = true;
+  for (int i = 0; i < 60 && any_alive; ++i) {  // 1.5 s: a subject run takes longer than that
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    any_alive = false;
+    for (pid_t k : kids) any_alive = any_alive || process_alive(k);
+  }
+  EXPECT_FALSE(any_alive) << "a child run outlived the killed group";
+}
+
+}  // namespace
+}  // namespace authalic
