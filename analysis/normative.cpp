@@ -247,7 +247,8 @@ std::string reference_to_json(const NormativeReference& r) {
       "sqrt(m2 / (n - 1)), also given as sd); with age_model, age_mean, age_m2 and age_value_comoment = "
       "sum (age - age_mean)(value - mean), the sufficient statistics of a linear age model. Arrays run over "
       "the hemisphere blocks in the order listed, then element id = row * cols + col (row 0 at the bottom "
-      "of the domain). References merge exactly (Chan et al. pairwise formulas): authalic normative merge.";
+      "of the domain). References merge exactly (Chan et al. pairwise formulas): authalic normative merge. "
+      "partial = true: a piece for merging (fewer than 3 controls allowed), refused by compare.";
   j["domain"] = to_string(r.grid.domain);
   j["k"] = r.grid.k;
   j["rows"] = r.grid.rows;

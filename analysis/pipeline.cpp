@@ -337,6 +337,15 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   NormativeReference reference;
   const bool compare = !in.normative.empty();
   if (compare) reference = read_reference(in.normative);
+  if (compare && reference.age_model && !(in.age > 0)) {
+    // z would silently not be age adjusted (issue 15: up to 1.2 in z at 75 years).
+    if (options.require_age)
+      throw InputError(in.normative + ": the reference has an age model but no --age was given; give --age YEARS, or drop "
+                                      "--require-age to compare without age adjustment");
+    summary.warnings.push_back("the reference " + in.normative +
+                               " has an age model but the subject's age is unknown (--age): z-scores are NOT age adjusted");
+    log.note("warning: " + summary.warnings.back());
+  }
   std::unique_ptr<io::Volume> mask;
   if (options.normalize != "none" && options.normalize != "global") mask = std::make_unique<io::Volume>(io::read_volume(options.normalize));
   const json checksums = input_checksums(in);
@@ -447,6 +456,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     co.threshold = options.z_threshold;
     co.rescale = options.rescale;
     cmp = compare_to_reference(reference, table, co);
+    for (const std::string& n : cmp.notes) log.note(n);
     summary.abnormal_elements = cmp.num_hypo + cmp.num_hyper;
     summary.clusters = static_cast<int>(cmp.clusters.size());
     log.end(summary);
@@ -463,6 +473,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
                  {"sampling", hemis[0].sampling.method},
                  {"normalisation", norm.description.empty() ? "none" : norm.description},
                  {"z_threshold", options.z_threshold},
+                 {"z_age_adjusted", compare && cmp.age_adjusted},
                  {"rescale_to_reference", options.rescale}};
   // One JSON sidecar per BIDS base name (x.nii.gz and x.png share x.json, which lists both).
   std::map<std::string, json> sidecars;
@@ -562,6 +573,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     rd.software = software();
     rd.pet_units = table.units;
     rd.subject_info = {{"PET", fs::path(in.pet).filename().string()}, {"age", in.age > 0 ? std::to_string(in.age) : "unknown"}};
+    for (const std::string& w : summary.warnings) rd.notes.push_back("Warning: " + w + ".");
     for (const auto& [k, v] : params.items()) rd.parameters.emplace_back(k, v.is_string() ? v.get<std::string>() : v.dump());
     for (int b = 0; b < 2; ++b) {
       Hemisphere& h = hemis[b];

@@ -40,6 +40,7 @@ struct RunOptions {
   bool rescale = true;          // CompareOptions::rescale
   bool report = true;           // write report.html
   bool rectangle = true;        // also the 1:2 whole-brain rectangle map
+  bool require_age = false;     // refuse a reference with an age model when the age is unknown
   int pet_frame = -1;           // 4D PET: the frame to sample (0-based); -1: none chosen
   bool pet_sum_frames = false;  // 4D PET: sum all frames
 };
@@ -52,6 +53,7 @@ struct RunSummary {
   int abnormal_elements = -1;   // -1 without a reference
   int clusters = -1;
   std::vector<std::string> files;  // written, relative to subject_dir
+  std::vector<std::string> warnings;  // also in log.txt and the report
 };
 
 // Runs the pipeline. Throws InputError (bad input, nothing written) or ProcessingError.

@@ -112,10 +112,11 @@ void run_jobs(std::vector<Job>& jobs, int parallel, const std::string& stage, co
 
 std::vector<std::string> subject_args(const std::string& exe, const CohortSubject& s, int k, int threads,
                                       const std::string& out) {
-  return {exe, "run", "--id", s.id, "--lh-white", s.lh_white, "--lh-pial", s.lh_pial, "--rh-white", s.rh_white,
+  std::vector<std::string> args = {exe, "run", "--id", s.id, "--lh-white", s.lh_white, "--lh-pial", s.lh_pial, "--rh-white", s.rh_white,
           "--rh-pial", s.rh_pial, "--lh-cortex", s.lh_cortex, "--rh-cortex", s.rh_cortex, "--pet", s.pet,
-          "--age", std::to_string(s.age), "--k", std::to_string(k), "--threads", std::to_string(threads),
-          "--out", out, "--force", "--quiet"};
+          "--k", std::to_string(k), "--threads", std::to_string(threads), "--out", out, "--force", "--quiet"};
+  if (s.age > 0) args.insert(args.end(), {"--age", std::to_string(s.age)});  // unknown: left out
+  return args;
 }
 
 struct GroupArgs {

@@ -50,8 +50,11 @@ int run(RunArgs& a) {
         std::filesystem::path(a.options.out_dir) / (".sub-" + in.id + ".partial-" + std::to_string(::getpid())), ec);
     throw;
   }
+  if (!global_options().json)
+    for (const auto& w : s.warnings) std::cerr << "authalic run: warning: " << w << '\n';
   if (global_options().json) {
     nlohmann::json j = {{"subject_dir", s.subject_dir},
+                        {"warnings", s.warnings},
                         {"flips", {{"left", s.flips_left}, {"right", s.flips_right}}},
                         {"element_area_cv", {{"left", s.element_cv_left}, {"right", s.element_cv_right}}},
                         {"files", s.files}};
@@ -95,6 +98,8 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_option("--t1", in.t1, "T1 MRI the surfaces belong to: the PET is rigidly registered to it (ITK v4, Mattes mutual information) before sampling; without it the PET is assumed co-registered");
   sub->add_option("--normative", in.normative, "Normative reference (authalic normative build): adds z-scores");
   sub->add_option("--frame", a->options.pet_frame, "4D PET: the frame to sample (0-based)")->check(in_range(0, 100000));
+  sub->add_flag("--require-age", a->options.require_age,
+                "Refuse a --normative reference with an age model when --age is not given (else: a warning, z not age adjusted)");
   sub->add_flag("--sum-frames", a->options.pet_sum_frames, "4D PET: sum all frames (a static image from dynamic frames)");
   sub->add_option("--age", in.age, "Age in years (used by references with an age model)")->check(age_years());
   sub->add_option("--out", a->options.out_dir, "Output folder; the subject goes to OUT/sub-<id>")->required();

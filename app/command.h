@@ -30,8 +30,8 @@ GlobalOptions& global_options();
 // CLI::Range's "0.050000 to 10.000000"); NaN and trailing characters are refused.
 CLI::Validator in_range(double lo, double hi);
 
-// Validator for ages in years: a plain finite number in [0, 130] ("7O", "nan", "-inf", "-5"
-// are refused, not read as 7 or unknown).
+// Validator for ages in years: a plain finite number in (0, 130] ("7O", "nan", "-inf", "-5",
+// and 0, which once meant "unknown", are refused, not read as 7 or unknown).
 CLI::Validator age_years();
 // The same rule for text (a cohort CSV cell); returns the age or throws InputError("<where>: ...").
 double parse_age(const std::string& text, const std::string& where);

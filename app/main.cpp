@@ -70,7 +70,9 @@ double parse_age(const std::string& text, const std::string& where) {
   const double age = std::strtod(text.c_str(), &end);
   if (text.empty() || end != text.c_str() + text.size() || errno == ERANGE || !std::isfinite(age))
     throw InputError((where.empty() ? "" : where + ": ") + "age '" + text + "' is not a number of years");
-  if (age < 0 || age > 130) throw InputError((where.empty() ? "" : where + ": ") + "age " + text + " is outside 0 to 130 years");
+  if (!(age > 0) || age > 130)
+    throw InputError((where.empty() ? "" : where + ": ") + "age " + text +
+                     " is outside 0 (exclusive) to 130 years; an unknown age is left out, not given as 0");
   return age;
 }
 
@@ -84,7 +86,7 @@ CLI::Validator age_years() {
         }
         return {};
       },
-      "YEARS (0-130)");
+      "YEARS (0-130]");
 }
 
 void add_common_options(CLI::App& sub) {

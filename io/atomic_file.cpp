@@ -97,12 +97,12 @@ void write_atomically(const std::string& path_given, const std::function<void(co
   std::string pattern = (fs::path(folder_str) / ("." + stem + ".tmp" + std::to_string(::getpid()) + "-XXXXXX" + suffix)).string();
   std::vector<char> buf(pattern.begin(), pattern.end());
   buf.push_back('\0');
-  const int fd = ::mkstemps(buf.data(), static_cast<int>(suffix.size()));
+  std::unique_ptr<detail::RemoveOnSignal> remove_on_signal;  // a SIGTERM mid-write leaves no temporary file
+  const int fd = detail::mkstemps_removed_on_signal(buf, static_cast<int>(suffix.size()), &remove_on_signal);
   if (fd < 0) throw std::runtime_error(path + ": cannot create a temporary file in " + folder_str + ": " + errno_reason(errno, folder_str));
   ::fchmod(fd, 0666 & ~current_umask());
   ::close(fd);
   const std::string tmp(buf.data());
-  const detail::RemoveOnSignal remove_on_signal(tmp);  // a SIGTERM mid-write leaves no temporary file
 
   try {
     write(tmp);

@@ -251,16 +251,29 @@ RemoveOnSignal::~RemoveOnSignal() {
   g_signal_used[slot_] = 0;
 }
 
+int mkstemps_removed_on_signal(std::vector<char>& pattern, int suffix_len, std::unique_ptr<RemoveOnSignal>* remove) {
+  install_signal_handlers_once();
+  sigset_t block, old;
+  sigemptyset(&block);
+  for (int sig : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&block, sig);
+  ::pthread_sigmask(SIG_BLOCK, &block, &old);
+  const int fd = ::mkstemps(pattern.data(), suffix_len);
+  const int err = errno;
+  if (fd >= 0) *remove = std::make_unique<RemoveOnSignal>(std::string(pattern.data()));
+  ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
+  errno = err;
+  return fd;
+}
+
 TempFile::TempFile(const std::string& suffix) {
   const std::string folder = std::filesystem::temp_directory_path().string();
   std::string pattern = folder + "/authalic-XXXXXX" + suffix;
   std::vector<char> buf(pattern.begin(), pattern.end());
   buf.push_back('\0');
-  const int fd = ::mkstemps(buf.data(), static_cast<int>(suffix.size()));
+  const int fd = mkstemps_removed_on_signal(buf, static_cast<int>(suffix.size()), &on_signal_);
   if (fd < 0) throw std::runtime_error("cannot create a temporary file in " + folder + ": " + std::strerror(errno));
   ::close(fd);
   path_ = buf.data();
-  on_signal_ = std::make_unique<RemoveOnSignal>(path_);
 }
 
 TempFile::~TempFile() { ::unlink(path_.c_str()); }

@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "core/error.h"
 
@@ -145,6 +146,11 @@ class RemoveOnSignal {
  private:
   int slot_ = -1;
 };
+
+// mkstemps(pattern, suffix_len) with SIGTERM/SIGINT/SIGHUP blocked until the new file is
+// registered in *remove: a signal cannot land between creating the file and covering it.
+// Returns the descriptor (< 0 with errno set on failure, *remove left empty).
+int mkstemps_removed_on_signal(std::vector<char>& pattern, int suffix_len, std::unique_ptr<RemoveOnSignal>* remove);
 
 class TempFile {
  public:

@@ -376,6 +376,29 @@ TEST(ReliabilityCli, ErrorsNameTheRealProblem) {
   EXPECT_EQ(lines_of(out), 1) << out;
 }
 
+// ---- issue 15, item 10: an age model without the age ---------------------------------------------
+
+TEST(ReliabilityCli, RunWithoutAgeAgainstAnAgeModelWarnsOrIsRefused) {
+  const std::string dir = test::temp_dir("rel-age");
+  const std::string ref = q(sample("normative.json"));  // built with an age model
+  std::string out;
+  EXPECT_EQ(test::run_command(run_args(dir + "/a") + " --normative " + ref + " --require-age", &out), 2) << out;
+  EXPECT_NE(out.find("has an age model but no --age was given"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/a/sub-patient01"));
+  ASSERT_EQ(test::run_command(run_args(dir + "/b") + " --normative " + ref, &out), 0) << out;
+  EXPECT_NE(out.find("authalic run: warning:"), std::string::npos) << "--quiet must not hide the warning: " << out;
+  EXPECT_NE(out.find("NOT age adjusted"), std::string::npos) << out;
+  std::ifstream log(dir + "/b/sub-patient01/log.txt");
+  const std::string text((std::istreambuf_iterator<char>(log)), {});
+  EXPECT_NE(text.find("NOT age adjusted"), std::string::npos) << text;
+  std::ifstream report(dir + "/b/sub-patient01/report.html");
+  const std::string html((std::istreambuf_iterator<char>(report)), {});
+  EXPECT_NE(html.find("NOT age adjusted"), std::string::npos);
+  // With the age: no warning.
+  ASSERT_EQ(test::run_command(run_args(dir + "/c") + " --normative " + ref + " --age 70", &out), 0) << out;
+  EXPECT_EQ(out.find("warning"), std::string::npos) << out;
+}
+
 // ---- 13. PET noise around zero ------------------------------------------------------------------
 
 TEST(ReliabilityCli, GlobalNormalisationOfNoiseAroundZeroIsRefused) {
