@@ -337,15 +337,10 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   NormativeReference reference;
   const bool compare = !in.normative.empty();
   if (compare) reference = read_reference(in.normative);
-  if (compare && reference.age_model && !(in.age > 0)) {
-    // z would silently not be age adjusted (issue 15: up to 1.2 in z at 75 years).
-    if (options.require_age)
-      throw InputError(in.normative + ": the reference has an age model but no --age was given; give --age YEARS, or drop "
-                                      "--require-age to compare without age adjustment");
-    summary.warnings.push_back("the reference " + in.normative +
-                               " has an age model but the subject's age is unknown (--age): z-scores are NOT age adjusted");
-    log.note("warning: " + summary.warnings.back());
-  }
+  // Refused before any map is computed; without --require-age the comparison says so (step 5).
+  if (compare && reference.age_model && !(in.age > 0) && options.require_age)
+    throw InputError(in.normative + ": the reference has an age model but no --age was given; give --age YEARS, or drop "
+                                    "--require-age to compare without age adjustment");
   std::unique_ptr<io::Volume> mask;
   if (options.normalize != "none" && options.normalize != "global") mask = std::make_unique<io::Volume>(io::read_volume(options.normalize));
   const json checksums = input_checksums(in);
@@ -457,6 +452,11 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     co.rescale = options.rescale;
     cmp = compare_to_reference(reference, table, co);
     for (const std::string& n : cmp.notes) log.note(n);
+    // z silently not age adjusted would read as adjusted (issue 15: up to 1.2 in z at 75 years).
+    if (reference.age_model && !cmp.age_adjusted)
+      summary.warnings.push_back("the reference " + in.normative +
+                                 " has an age model but the subject's age is unknown (--age): z-scores are NOT age adjusted");
+    for (const std::string& w : summary.warnings) log.note("warning: " + w);
     summary.abnormal_elements = cmp.num_hypo + cmp.num_hyper;
     summary.clusters = static_cast<int>(cmp.clusters.size());
     log.end(summary);

@@ -105,20 +105,35 @@ nlohmann::json part_json(const RectanglePart& p) {
             {"flips", p.flow.flips}}}};
 }
 
-// Every file the command will write, for the up-front path checks (io/file_roles.h).
-std::vector<std::string> output_paths(const RectangleArgs& a) {
-  std::vector<std::string> out = {a.metrics, a.png, a.histogram};
+// The surfaces the command writes, named once for the writers and the up-front path checks
+// (io/file_roles.h). --surface: OUT, <stem>.flat/.cut.surf.gii; --lh/--rh: OUT.lh/.rh(.flat).surf.gii.
+struct SurfaceOutputs {
+  std::string map, flat, cut;                   // --surface form
+  std::string lh, rh, lh_flat, rh_flat;         // --lh/--rh form
+};
+
+SurfaceOutputs surface_outputs(const RectangleArgs& a) {
+  SurfaceOutputs o;
   if (!a.surface.empty()) {
     const std::string stem = stem_of(a.out);
-    out.push_back(a.out);
-    if (a.flat) out.push_back(stem + ".flat.surf.gii");
-    if (a.cut_surface) out.push_back(stem + ".cut.surf.gii");
+    o.map = a.out;
+    o.flat = stem + ".flat.surf.gii";
+    o.cut = stem + ".cut.surf.gii";
   } else {
-    out.push_back(a.out + ".lh.surf.gii");
-    out.push_back(a.out + ".rh.surf.gii");
-    if (a.flat) out.push_back(a.out + ".lh.flat.surf.gii");
-    if (a.flat) out.push_back(a.out + ".rh.flat.surf.gii");
+    o.lh = a.out + ".lh.surf.gii";
+    o.rh = a.out + ".rh.surf.gii";
+    o.lh_flat = a.out + ".lh.flat.surf.gii";
+    o.rh_flat = a.out + ".rh.flat.surf.gii";
   }
+  return o;
+}
+
+// Every file the command will write.
+std::vector<std::string> output_paths(const RectangleArgs& a) {
+  const SurfaceOutputs o = surface_outputs(a);
+  std::vector<std::string> out = {a.metrics, a.png, a.histogram, o.map, o.lh, o.rh};
+  if (a.flat) out.insert(out.end(), {o.flat, o.lh_flat, o.rh_flat});
+  if (a.cut_surface) out.push_back(o.cut);
   return out;
 }
 
@@ -248,18 +263,18 @@ void run_one_surface(const RectangleArgs& a) {
   const Checked checked = check_acceptance(a, {&r.map}, a.surface);
   const std::string& problem = checked.problem;
   const std::string structure = s.metadata.count("AnatomicalStructurePrimary") ? s.metadata.at("AnatomicalStructurePrimary") : "";
-  io::write_surface(a.out, as_flat_mesh(r.map.UV, r.map.F), flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)", problem));
-  const std::string stem = stem_of(a.out);
+  const SurfaceOutputs names = surface_outputs(a);
+  io::write_surface(names.map, as_flat_mesh(r.map.UV, r.map.F), flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)", problem));
   if (a.flat) {
     // 1 mm^2 of flat map = 1 mm^2 of cortex: the rectangle (area 2) scaled by sqrt(area / 2).
-    io::write_surface(stem + ".flat.surf.gii", as_flat_mesh(r.map.UV, r.map.F, std::sqrt(r.map.area_mm2 / 2.0)),
+    io::write_surface(names.flat, as_flat_mesh(r.map.UV, r.map.F, std::sqrt(r.map.area_mm2 / 2.0)),
                       flat_options(structure, "rectangle scaled to the cortical area (mm)", problem));
   }
   if (a.cut_surface) {
     io::SurfaceWriteOptions wo;
     wo.anatomical_structure = structure;
     wo.metadata = {{"authalic_map", "input surface cut open along the rectangle's cut path (same vertices as the map)"}};
-    io::write_surface(stem + ".cut.surf.gii", TriMesh{r.map.V, r.map.F}, wo);
+    io::write_surface(names.cut, TriMesh{r.map.V, r.map.F}, wo);
   }
   const VectorXd shading = a.png.empty() ? VectorXd::Zero(s.mesh.num_vertices())
                            : a.sulc.empty() ? sulcal_depth_proxy(s.mesh.V, s.mesh.F)
@@ -294,13 +309,14 @@ void run_two_hemispheres(const RectangleArgs& a) {
   const std::string what = a.lh + ", " + a.rh;
   const Checked checked = check_acceptance(a, {&r.left, &r.right}, what);
   const std::string& problem = checked.problem;
-  const std::string lpath = a.out + ".lh.surf.gii", rpath = a.out + ".rh.surf.gii";
+  const SurfaceOutputs names = surface_outputs(a);
+  const std::string &lpath = names.lh, &rpath = names.rh;
   io::write_surface(lpath, as_flat_mesh(r.left.UV, r.left.F), flat_options("CortexLeft", "rectangle [0,2]x[0,1], left part", problem));
   io::write_surface(rpath, as_flat_mesh(r.right.UV, r.right.F), flat_options("CortexRight", "rectangle [0,2]x[0,1], right part", problem));
   if (a.flat) {
     const double scale = std::sqrt((r.left.area_mm2 + r.right.area_mm2) / 2.0);
-    io::write_surface(a.out + ".lh.flat.surf.gii", as_flat_mesh(r.left.UV, r.left.F, scale), flat_options("CortexLeft", "rectangle scaled to the cortical area (mm)", problem));
-    io::write_surface(a.out + ".rh.flat.surf.gii", as_flat_mesh(r.right.UV, r.right.F, scale), flat_options("CortexRight", "rectangle scaled to the cortical area (mm)", problem));
+    io::write_surface(names.lh_flat, as_flat_mesh(r.left.UV, r.left.F, scale), flat_options("CortexLeft", "rectangle scaled to the cortical area (mm)", problem));
+    io::write_surface(names.rh_flat, as_flat_mesh(r.right.UV, r.right.F, scale), flat_options("CortexRight", "rectangle scaled to the cortical area (mm)", problem));
   }
   auto shading = [&](const io::Surface& s, const std::string& sulc) -> VectorXd {
     if (a.png.empty()) return VectorXd::Zero(s.mesh.num_vertices());

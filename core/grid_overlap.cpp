@@ -218,6 +218,13 @@ namespace {
 // mapped to itself: 2.661e-5 vs 2.666e-5 at 64 x 32; fs741 pial sphere 0.0048541 both).
 constexpr double kArcAreaTolerance = 1e-10;
 
+// A longitude difference brought into [−π, π].
+double wrap_angle(double d) {
+  while (d > M_PI) d -= 2 * M_PI;
+  while (d < -M_PI) d += 2 * M_PI;
+  return d;
+}
+
 void follow_arc(const Eigen::Vector3d& a, const Pt& pa, const Eigen::Vector3d& b, const Pt& pb, int depth, ArcPoly& poly) {
   constexpr int kMaxDepth = 7;
   if (depth >= kMaxDepth) return;
@@ -227,9 +234,7 @@ void follow_arc(const Eigen::Vector3d& a, const Pt& pa, const Eigen::Vector3d& b
   const Eigen::Vector3d m = sum / len;
   const double rho = std::sqrt(m.x() * m.x() + m.y() * m.y());
   if (rho < 1e-12) return;  // through a pole: a meridian, straight in (φ, z)
-  double d = std::atan2(m.y(), m.x()) - pa.x;
-  d -= 2 * M_PI * std::round(d / (2 * M_PI));
-  const Pt pm{pa.x + d, std::clamp(m.z(), -1.0, 1.0)};
+  const Pt pm{pa.x + wrap_angle(std::atan2(m.y(), m.x()) - pa.x), std::clamp(m.z(), -1.0, 1.0)};
   const double cx = pb.x - pa.x, cy = pb.y - pa.y, chord = std::sqrt(cx * cx + cy * cy);
   const double deviation = std::abs(cx * (pm.y - pa.y) - cy * (pm.x - pa.x)) / std::max(chord, 1e-300);
   if (deviation * chord <= kArcAreaTolerance || chord < 1e-12) return;
@@ -245,15 +250,9 @@ void follow_arc(const Eigen::Vector3d& a, const Pt& pa, const Eigen::Vector3d& b
 bool whole_face_in_one_cell(const Eigen::Vector3d (&p)[3], const double (&phi)[3], const double (&z)[3], const bool (&at_pole)[3],
                             double cw, double rh, const SphereGridSpec& grid, int f, std::vector<OverlapPiece>& out) {
   if (at_pole[0] || at_pole[1] || at_pole[2]) return false;
-  double u[3] = {phi[0], 0, 0};
-  for (int k = 1; k < 3; ++k) {
-    double d = phi[k] - u[k - 1];
-    d -= 2 * M_PI * std::round(d / (2 * M_PI));
-    u[k] = u[k - 1] + d;
-  }
-  double close = phi[0] - u[2];
-  close -= 2 * M_PI * std::round(close / (2 * M_PI));
-  if (std::abs(u[2] + close - u[0]) > 1e-9) return false;  // winds around a pole
+  // Longitudes unwrapped along the walk; a face that does not wind around a pole comes back to u[0].
+  const double u[3] = {phi[0], phi[0] + wrap_angle(phi[1] - phi[0]), phi[0] + wrap_angle(phi[1] - phi[0]) + wrap_angle(phi[2] - phi[1])};
+  if (std::abs(u[2] + wrap_angle(phi[0] - phi[2]) - u[0]) > 1e-9) return false;  // winds around a pole
   double xmin = std::min({u[0], u[1], u[2]}), xmax = std::max({u[0], u[1], u[2]});
   double ymin = std::min({z[0], z[1], z[2]}), ymax = std::max({z[0], z[1], z[2]});
   double margin = 1e-12;
@@ -261,15 +260,9 @@ bool whole_face_in_one_cell(const Eigen::Vector3d (&p)[3], const double (&phi)[3
     const int j = (k + 1) % 3;
     const Eigen::Vector3d m = (p[k] + p[j]).normalized();
     if (!m.allFinite() || std::sqrt(m.x() * m.x() + m.y() * m.y()) < 1e-12) return false;
-    double d = std::atan2(m.y(), m.x()) - u[k];
-    d -= 2 * M_PI * std::round(d / (2 * M_PI));
-    const double mx = u[k] + d, my = m.z();
+    const double mx = u[k] + wrap_angle(std::atan2(m.y(), m.x()) - u[k]), my = m.z();
     xmin = std::min(xmin, mx), xmax = std::max(xmax, mx), ymin = std::min(ymin, my), ymax = std::max(ymax, my);
-    const double uj = u[k] + [&] {
-      double e = u[j] - u[k];
-      return e - 2 * M_PI * std::round(e / (2 * M_PI));
-    }();
-    const double cx = uj - u[k], cy = z[j] - z[k], chord = std::sqrt(cx * cx + cy * cy);
+    const double cx = u[j] - u[k], cy = z[j] - z[k], chord = std::sqrt(cx * cx + cy * cy);
     if (chord > 0) margin = std::max(margin, 0.5 * std::abs(cx * (my - z[k]) - cy * (mx - u[k])) / chord);
   }
   xmin -= margin, xmax += margin, ymin -= margin, ymax += margin;
@@ -300,11 +293,6 @@ std::vector<OverlapPiece> sphere_grid_overlap(const MatrixXd& S, const MatrixXi&
   // line is unwrapped to continuous φ and clipped against three copies of the grid; a triangle
   // around a pole becomes the region between its edges and the line z = ±1.
   const double cw = 2 * M_PI / grid.sectors, rh = 2.0 / grid.bands;
-  auto wrap = [](double d) {
-    while (d > M_PI) d -= 2 * M_PI;
-    while (d < -M_PI) d += 2 * M_PI;
-    return d;
-  };
   return collect_pieces(F.rows(), [&](int f, std::vector<OverlapPiece>& out) {
     Eigen::Vector3d p[3];
     double phi[3], z[3];
@@ -342,7 +330,7 @@ std::vector<OverlapPiece> sphere_grid_overlap(const MatrixXd& S, const MatrixXi&
         poly.push_back({last, z[k] > 0 ? 1.0 : -1.0});
         continue;
       }
-      const double ph = last + wrap(phi[k] - last);
+      const double ph = last + wrap_angle(phi[k] - last);
       if (at_pole[prev]) {
         poly.push_back({ph, z[prev] > 0 ? 1.0 : -1.0});
       } else {

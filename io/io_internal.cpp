@@ -59,7 +59,21 @@ std::string read_file_maybe_gz(const std::string& path) {
   return bytes;
 }
 
+bool nifti_header_view(const std::string& bytes, NiftiHeaderView* view) {
+  if (bytes.size() < 348) return false;
+  for (const bool swap : {false, true}) {
+    const auto size = field_at<std::int32_t>(bytes, 0, swap);
+    if (size == 348 || (size == 540 && bytes.size() >= 540)) {
+      view->v2 = size == 540;
+      view->swap = swap;
+      return true;
+    }
+  }
+  return false;
+}
+
 namespace {
+
 
 // The bytes a NIfTI-1/2 or MGH image declares (header, voxels, a margin for extensions and
 // tags), from its first 540 decompressed bytes; 0 when the head is neither (no bound known).
@@ -67,21 +81,15 @@ long double declared_image_bytes(const std::string& head) {
   if (head.size() < 540) return 0;
   const std::uint16_t one = 1;
   const bool little = *reinterpret_cast<const unsigned char*>(&one) == 1;
-  for (const bool swap : {false, true}) {
-    const auto sizeof_hdr = field_at<std::int32_t>(head, 0, swap);
-    if (sizeof_hdr == 348 || sizeof_hdr == 540) {
-      const bool v2 = sizeof_hdr == 540;
-      const int ndim = v2 ? static_cast<int>(field_at<std::int64_t>(head, 16, swap)) : field_at<std::int16_t>(head, 40, swap);
-      const int bitpix = v2 ? field_at<std::int16_t>(head, 14, swap) : field_at<std::int16_t>(head, 72, swap);
-      const long double offset = v2 ? static_cast<long double>(field_at<std::int64_t>(head, 168, swap))
-                                     : static_cast<long double>(field_at<float>(head, 108, swap));
-      if (ndim < 1 || ndim > 7 || bitpix <= 0 || !(offset >= 0)) return 0;
-      long double voxels = 1;
-      for (int d = 1; d <= ndim; ++d)
-        voxels *= std::max<long double>(1, v2 ? static_cast<long double>(field_at<std::int64_t>(head, 16 + 8 * d, swap))
-                                              : static_cast<long double>(field_at<std::int16_t>(head, 40 + 2 * d, swap)));
-      return std::max<long double>(offset, sizeof_hdr) + voxels * bitpix / 8 + (1 << 20);
-    }
+  NiftiHeaderView h{head};
+  if (nifti_header_view(head, &h)) {
+    const long long ndim = h.dim(0);
+    const int bitpix = h.bitpix();
+    const long double offset = h.vox_offset();
+    if (ndim < 1 || ndim > 7 || bitpix <= 0 || !(offset >= 0)) return 0;
+    long double voxels = 1;
+    for (int d = 1; d <= ndim; ++d) voxels *= std::max<long double>(1, static_cast<long double>(h.dim(d)));
+    return std::max<long double>(offset, h.sizeof_hdr()) + voxels * bitpix / 8 + (1 << 20);
   }
   // MGH: big-endian version 1, then width, height, depth, frames, type.
   const bool swap = little;

@@ -133,6 +133,27 @@ T field_at(const std::string& bytes, std::size_t at, bool swap) {
   return v;
 }
 
+// A NIfTI-1 (sizeof_hdr 348) or NIfTI-2 (540) header at the start of `bytes`, in the byte order
+// its sizeof_hdr reads in, with the fields the raw checks need (offsets of the two versions).
+struct NiftiHeaderView {
+  const std::string& bytes;
+  bool v2 = false;
+  bool swap = false;
+  int sizeof_hdr() const { return v2 ? 540 : 348; }
+  long long dim(int i) const { return v2 ? field_at<std::int64_t>(bytes, 16 + 8 * i, swap) : field_at<std::int16_t>(bytes, 40 + 2 * i, swap); }
+  int datatype() const { return v2 ? field_at<std::int16_t>(bytes, 12, swap) : field_at<std::int16_t>(bytes, 70, swap); }
+  int bitpix() const { return v2 ? field_at<std::int16_t>(bytes, 14, swap) : field_at<std::int16_t>(bytes, 72, swap); }
+  // A float field of NIfTI-1 at at1, double of NIfTI-2 at at2.
+  double real(std::size_t at1, std::size_t at2) const {
+    return v2 ? field_at<double>(bytes, at2, swap) : static_cast<double>(field_at<float>(bytes, at1, swap));
+  }
+  long double vox_offset() const {  // NIfTI-2: int64
+    return v2 ? static_cast<long double>(field_at<std::int64_t>(bytes, 168, swap)) : field_at<float>(bytes, 108, swap);
+  }
+};
+// The header view, or false when `bytes` does not start with a whole NIfTI-1/2 header.
+bool nifti_header_view(const std::string& bytes, NiftiHeaderView* view);
+
 // While alive, `path` is unlinked if the process gets SIGTERM, SIGINT or SIGHUP (the signal then
 // ends the process as before): temporary files and half-written outputs do not outlive a killed
 // run. At most 32 at once; beyond that a file is simply not covered.

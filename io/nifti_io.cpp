@@ -84,41 +84,33 @@ std::string plain_number(double x) {
 //    orientation (and then "95 % of the surface outside the field of view"). The raw fields of
 //    the transform in use are checked.
 void check_orientation_fields(const std::string& h, const std::string& path) {
-  if (h.size() < 348) return;  // nifti-clib refuses it with its own message
-  for (const bool swap : {false, true}) {
-    const auto size = field_at<std::int32_t>(h, 0, swap);
-    if (size != 348 && !(size == 540 && h.size() >= 540)) continue;
-    const bool v2 = size == 540;
-    const long long ndim = v2 ? field_at<std::int64_t>(h, 16, swap) : field_at<std::int16_t>(h, 40, swap);
-    const int datatype = v2 ? field_at<std::int16_t>(h, 12, swap) : field_at<std::int16_t>(h, 70, swap);
-    static const int known[] = {1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 768, 1024, 1280, 1536, 1792, 2048, 2304};
-    if (ndim < 1 || ndim > 7 || std::find(std::begin(known), std::end(known), datatype) == std::end(known))
-      fail(path, "the header is inconsistent (dim[0] " + std::to_string(ndim) + ", datatype " + std::to_string(datatype) +
-                     " in the byte order its sizeof_hdr gives)",
-           "the file is corrupt; re-create it");
-    auto real = [&](std::size_t at1, std::size_t at2) {
-      return v2 ? field_at<double>(h, at2, swap) : static_cast<double>(field_at<float>(h, at1, swap));
-    };
-    const int qform = v2 ? field_at<std::int32_t>(h, 344, swap) : field_at<std::int16_t>(h, 252, swap);
-    const int sform = v2 ? field_at<std::int32_t>(h, 348, swap) : field_at<std::int16_t>(h, 254, swap);
-    if (sform > 0) {
-      for (int i = 0; i < 12; ++i)
-        if (!std::isfinite(real(280 + 4 * i, 400 + 8 * i)))
-          fail(path, "the sform (srow) holds a non-finite number", "fix the header's orientation (e.g. nibabel set_sform) and retry");
-    } else if (qform > 0) {
-      static const char* names[] = {"quatern_b", "quatern_c", "quatern_d", "qoffset_x", "qoffset_y", "qoffset_z"};
-      for (int i = 0; i < 6; ++i)
-        if (!std::isfinite(real(256 + 4 * i, 352 + 8 * i)))
-          fail(path, std::string("the qform's ") + names[i] + " is not a finite number (nifti-clib would read it as 0, another orientation)",
-               "fix the header's orientation (e.g. nibabel set_qform) and retry");
-      for (int d = 1; d <= 3; ++d) {
-        const double p = real(76 + 4 * d, 104 + 8 * d);
-        if (!(p > 0) || !std::isfinite(p))
-          fail(path, "pixdim[" + std::to_string(d) + "] (the voxel size) is " + plain_number(p) + ", so the qform's voxel positions in mm are unknown",
-               "set the voxel size in the header (e.g. nibabel header.set_zooms) and retry");
-      }
+  NiftiHeaderView view{h};
+  if (!nifti_header_view(h, &view)) return;  // nifti-clib refuses it with its own message
+  const long long ndim = view.dim(0);
+  const int datatype = view.datatype();
+  static const int known[] = {1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 768, 1024, 1280, 1536, 1792, 2048, 2304};
+  if (ndim < 1 || ndim > 7 || std::find(std::begin(known), std::end(known), datatype) == std::end(known))
+    fail(path, "the header is inconsistent (dim[0] " + std::to_string(ndim) + ", datatype " + std::to_string(datatype) +
+                   " in the byte order its sizeof_hdr gives)",
+         "the file is corrupt; re-create it");
+  const int qform = view.v2 ? field_at<std::int32_t>(h, 344, view.swap) : field_at<std::int16_t>(h, 252, view.swap);
+  const int sform = view.v2 ? field_at<std::int32_t>(h, 348, view.swap) : field_at<std::int16_t>(h, 254, view.swap);
+  if (sform > 0) {
+    for (int i = 0; i < 12; ++i)
+      if (!std::isfinite(view.real(280 + 4 * i, 400 + 8 * i)))
+        fail(path, "the sform (srow) holds a non-finite number", "fix the header's orientation (e.g. nibabel set_sform) and retry");
+  } else if (qform > 0) {
+    static const char* names[] = {"quatern_b", "quatern_c", "quatern_d", "qoffset_x", "qoffset_y", "qoffset_z"};
+    for (int i = 0; i < 6; ++i)
+      if (!std::isfinite(view.real(256 + 4 * i, 352 + 8 * i)))
+        fail(path, std::string("the qform's ") + names[i] + " is not a finite number (nifti-clib would read it as 0, another orientation)",
+             "fix the header's orientation (e.g. nibabel set_qform) and retry");
+    for (int d = 1; d <= 3; ++d) {
+      const double p = view.real(76 + 4 * d, 104 + 8 * d);
+      if (!(p > 0) || !std::isfinite(p))
+        fail(path, "pixdim[" + std::to_string(d) + "] (the voxel size) is " + plain_number(p) + ", so the qform's voxel positions in mm are unknown",
+             "set the voxel size in the header (e.g. nibabel header.set_zooms) and retry");
     }
-    return;
   }
 }
 
