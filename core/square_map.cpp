@@ -61,6 +61,40 @@ MatrixXd extend_to_inserted(const MatrixXd& values, const ConformalMapResult& in
   return out;
 }
 
+namespace {
+// The map is stored as float32 (GIFTI): triangles too thin to keep their orientation at that
+// precision (images of almost degenerate surface triangles) are opened by the smallest move, so
+// the file a user reads has no flipped triangle (measured: fs741 pial, 16 of 295,000 read back
+// flipped before). Untangling is the fall-back; it smooths whole one-rings, which costs area
+// there (fs741 pial 96 % mask with a different BLAS's rounding: 68 thin triangles, element CV
+// 0.0024 -> 0.011), so the polish runs again after it. Returns the triangles left below the floor.
+int keep_orientation_in_single_precision(const MatrixXd& V, const MatrixXi& F, const VectorXi& side_mask,
+                                         const FlowOptions& fo, const ProgressFn& progress, MatrixXd& UV,
+                                         FlowReport& report) {
+  VectorXd floor = single_precision_area_floor(UV, F);
+  int left = open_thin_triangles(F, side_mask, fo.width, floor, UV);
+  if (left == 0) return 0;
+  untangle_flips(F, side_mask, fo.width, floor, UV, &left);
+  if (left > 0) return left;
+  // The polish again on the untangled map; kept only if it leaves (after opening) no triangle
+  // below the floor and a lower per-vertex error, else the untangled map stands.
+  FlowOptions polish_only = fo;
+  polish_only.max_passes = 0;
+  polish_only.polish_cg_iterations *= 4;  // the smoothed spots are badly conditioned: inexact steps stall there
+  FlowResult again = authalic_flow(V, F, UV, side_mask, polish_only, progress);
+  floor = single_precision_area_floor(again.UV, F);
+  if (open_thin_triangles(F, side_mask, fo.width, floor, again.UV) > 0) return 0;
+  if (!(again.report.final_vertex_mean < again.report.initial_vertex_mean)) return 0;
+  UV = std::move(again.UV);
+  report.polish_iterations += again.report.polish_iterations;
+  report.final_vertex_mean = again.report.final_vertex_mean;
+  report.final_vertex_p99 = again.report.final_vertex_p99;
+  report.final_vertex_max = again.report.final_vertex_max;
+  report.converged = again.report.converged;
+  return 0;
+}
+}  // namespace
+
 SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const SquareMapOptions& opt, const ProgressFn& progress) {
   if (V.cols() != 3) throw InputError("surface: vertex coordinates must be 3D; give a 3D surface");
   if (!(opt.width > 0)) throw InputError("square map: the rectangle width must be positive");
@@ -158,13 +192,7 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   R.initial.V.resize(0, 3);
   R.initial.F.resize(0, 3);
   R.initial.UV.resize(0, 2);
-  // The map is stored as float32 (GIFTI): triangles too thin to keep their orientation at that
-  // precision (images of almost degenerate surface triangles) are opened by the smallest move, so
-  // the file a user reads has no flipped triangle (measured: fs741 pial, 16 of 295,000 read back
-  // flipped before). Untangling is the fall-back (it moves whole one-rings).
-  const VectorXd floor = single_precision_area_floor(R.UV, R.F);
-  R.flips = open_thin_triangles(R.F, R.side_mask, opt.width, floor, R.UV);
-  if (R.flips > 0) untangle_flips(R.F, R.side_mask, opt.width, floor, R.UV, &R.flips);
+  R.flips = keep_orientation_in_single_precision(R.V, R.F, R.side_mask, fo, progress, R.UV, R.flow);
   if (R.flips > 0)
     throw ProcessingError("square map: the flow left " + std::to_string(R.flips) +
                           " folded triangles that the repair could not remove (per-vertex mean |ln area ratio| " +
