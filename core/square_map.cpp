@@ -66,8 +66,8 @@ namespace {
 // precision (images of almost degenerate surface triangles) are opened by the smallest move, so
 // the file a user reads has no flipped triangle (measured: fs741 pial, 16 of 295,000 read back
 // flipped before). Untangling is the fall-back; it smooths whole one-rings, which costs area
-// there (fs741 pial 96 % mask with a different BLAS's rounding: 68 thin triangles, element CV
-// 0.0024 -> 0.011), so the polish runs again after it. Returns the triangles left below the floor.
+// there (fs741 pial 96 % mask under OpenBLAS's rounding: 68 thin triangles, element CV 0.0024
+// -> 0.0090, exit 3), so the polish runs again after it (then CV 0.0030). Returns the triangles left below the floor.
 int keep_orientation_in_single_precision(const MatrixXd& V, const MatrixXi& F, const VectorXi& side_mask,
                                          const FlowOptions& fo, const ProgressFn& progress, MatrixXd& UV,
                                          FlowReport& report) {
