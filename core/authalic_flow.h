@@ -67,6 +67,10 @@ struct FlowOptions {
   double polish_far_band = 0.5;  // then (up to polish_iterations) local steps about the faces still beyond this
   int polish_cg_iterations = 50; // conjugate-gradient iterations per polish step (inexact Newton)
   int polish_rings = 3;          // vertices within this many rings of an out-of-band vertex move
+  // Polish steps keep every triangle above twice its float32 floor (single_precision_area_floor):
+  // for maps stored as float32. Off for intermediate maps (the sphere's square route: there the
+  // limit cost element CV, fs741 pial 0.0049 -> 0.0054).
+  bool polish_float32_floor = true;
   double theta = 0.5;            // fraction of the critical flip-preventing step (DLF eq. 5)
   int fixed_steps = 0;           // > 0: Zou's fixed-K schedule (eq. 19) with K = fixed_steps steps
   bool delaunay_flips = true;    // Delaunay edge flips of the flowing domain mesh (Mesh method)

@@ -79,7 +79,7 @@ namespace {
 // the vertices `fixed`; other used vertices free (natural Neumann condition on free boundary
 // vertices). Unused vertices get 0.
 MatrixXd solve_harmonic(const MatrixXd& V, const MatrixXi& F, const std::vector<int>& fixed, const MatrixXd& fixed_uv,
-                        HarmonicWeights weights) {
+                        HarmonicWeights weights, SpdSolver* reuse = nullptr) {
   const int nv = static_cast<int>(V.rows());
   const Eigen::Index cols = fixed_uv.cols();
   MatrixXd UV = MatrixXd::Zero(nv, cols);
@@ -164,8 +164,9 @@ MatrixXd solve_harmonic(const MatrixXd& V, const MatrixXi& F, const std::vector<
   if (weights == HarmonicWeights::Cotangent || weights == HarmonicWeights::ClampedCotangent) {
     // The cotangent matrix is the P1 stiffness matrix: positive definite with a Dirichlet
     // boundary whatever the triangle shapes, so a Cholesky factorisation applies.
-    const SpdSolver solver(A);
-    if (!solver.ok()) throw std::runtime_error("harmonic_map: cotangent factorisation failed");
+    SpdSolver local;
+    SpdSolver& solver = reuse ? *reuse : local;
+    if (!solver.refactor(A)) throw std::runtime_error("harmonic_map: cotangent factorisation failed");
     x = solver.solve(rhs);
   } else {
     Eigen::SparseLU<SparseMatrix> solver;
@@ -184,6 +185,11 @@ MatrixXd solve_harmonic(const MatrixXd& V, const MatrixXi& F, const std::vector<
 MatrixXd harmonic_map(const MatrixXd& V, const MatrixXi& F, const std::vector<int>& fixed, const MatrixXd& fixed_uv,
                       HarmonicWeights weights) {
   return solve_harmonic(V, F, fixed, fixed_uv.leftCols(2), weights);
+}
+
+MatrixXd harmonic_map(const MatrixXd& V, const MatrixXi& F, const std::vector<int>& fixed, const MatrixXd& fixed_uv,
+                      HarmonicWeights weights, SpdSolver& solver) {
+  return solve_harmonic(V, F, fixed, fixed_uv.leftCols(2), weights, &solver);
 }
 
 MatrixXd sliding_harmonic_map(const MatrixXd& V, const MatrixXi& F, const VectorXi& side_mask, double width,
@@ -206,7 +212,10 @@ MatrixXd sliding_harmonic_map(const MatrixXd& V, const MatrixXi& F, const Vector
   return out;
 }
 
-ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F, const RectangleBoundaryMap& opt) {
+ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F, const RectangleBoundaryMap& opt,
+                                           SpdSolver* solver) {
+  SpdSolver local;
+  SpdSolver& spd = solver ? *solver : local;  // the cotangent and clamped systems share one analysis
   const int nv = static_cast<int>(V.rows());
   const double w = opt.width;
   if (!(w > 0)) throw std::invalid_argument("conformal_rectangle_map: the rectangle width must be positive");
@@ -464,7 +473,7 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
   // The fallback weights, and uniform ones if those fold too.
   auto solve_with_fallback = [&] {
     R.weights = opt.fallback;
-    R.UV = harmonic_map(R.V, R.F, final_loop, buv, opt.fallback);
+    R.UV = harmonic_map(R.V, R.F, final_loop, buv, opt.fallback, spd);
     if (count_flipped(R.UV, R.F, min_area) > 0) {
       R.weights = HarmonicWeights::Uniform;
       R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::Uniform);
@@ -475,7 +484,7 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
     return R;
   }
   R.weights = HarmonicWeights::Cotangent;
-  R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::Cotangent);
+  R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::Cotangent, spd);
   if (opt.sliding_boundary) {
     // Least-squares conformal map with the boundary vertices free to slide along their sides
     // (corners and the anchor fixed): the area term of LSCM is constant on this constraint set,

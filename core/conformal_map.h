@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "core/mesh.h"
+#include "core/sparse_cholesky.h"
 
 namespace authalic {
 
@@ -98,13 +99,20 @@ struct ConformalMapResult {
 // The initial map described above. V: #V x 3 (mm), F: #F x 3 counter-clockwise seen from outside,
 // one disk (checked: throws std::invalid_argument otherwise; callers give users an InputError
 // first). Vertices not used by F are carried along unused.
-ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F, const RectangleBoundaryMap& boundary);
+// solver (optional): receives the factorisation of the last cotangent-type system, so a caller
+// solving more systems on the same mesh (the stretch-energy start) reuses its analysis.
+ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F, const RectangleBoundaryMap& boundary,
+                                           SpdSolver* solver = nullptr);
 
 // Harmonic map of a disk with a Dirichlet boundary: the vertices listed in `fixed` get the rows
 // of `fixed_uv` (#fixed x 2); every other vertex used by F is the weighted mean of its
 // neighbours. Unused vertices get (0, 0). Returns #V x 2.
 MatrixXd harmonic_map(const MatrixXd& V, const MatrixXi& F, const std::vector<int>& fixed, const MatrixXd& fixed_uv,
                       HarmonicWeights weights);
+// The same, factorising cotangent-type systems with `solver` (SpdSolver::refactor: its analysis
+// is reused when the system has the pattern it last analysed).
+MatrixXd harmonic_map(const MatrixXd& V, const MatrixXi& F, const std::vector<int>& fixed, const MatrixXd& fixed_uv,
+                      HarmonicWeights weights, SpdSolver& solver);
 
 // Least-squares conformal map onto the rectangle with boundary vertices sliding on their sides:
 // u harmonic with u = 0 / W on the left / right sides and a natural (Neumann) condition on the

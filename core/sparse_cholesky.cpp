@@ -1,7 +1,8 @@
 #include "core/sparse_cholesky.h"
 
 #include <Eigen/CholmodSupport>
-#include <Eigen/IterativeLinearSolvers>
+#include <algorithm>
+#include <limits>
 #include <Eigen/SparseCholesky>
 
 namespace authalic {
@@ -11,6 +12,7 @@ struct SpdSolver::Impl {
   Eigen::SimplicialLDLT<SparseMatrix> fallback;
   bool use_fallback = false;
   bool ok = false;
+  std::vector<SparseMatrix::StorageIndex> outer, inner;  // the pattern compute() analysed
 };
 
 SpdSolver::SpdSolver() : impl_(std::make_unique<Impl>()) {}
@@ -19,7 +21,23 @@ SpdSolver::~SpdSolver() = default;
 SpdSolver::SpdSolver(SpdSolver&&) noexcept = default;
 SpdSolver& SpdSolver::operator=(SpdSolver&&) noexcept = default;
 
+namespace {
+bool same_pattern(const SparseMatrix& A, const std::vector<SparseMatrix::StorageIndex>& outer,
+                  const std::vector<SparseMatrix::StorageIndex>& inner) {
+  return A.isCompressed() && static_cast<std::size_t>(A.outerSize() + 1) == outer.size() &&
+         static_cast<std::size_t>(A.nonZeros()) == inner.size() &&
+         std::equal(outer.begin(), outer.end(), A.outerIndexPtr()) && std::equal(inner.begin(), inner.end(), A.innerIndexPtr());
+}
+}  // namespace
+
 bool SpdSolver::compute(const SparseMatrix& A) {
+  if (A.isCompressed()) {
+    impl_->outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
+    impl_->inner.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+  } else {
+    impl_->outer.clear();
+    impl_->inner.clear();
+  }
   // Measured on fsaverage5 (2 cores, reference BLAS): Eigen's simplicial LDLT is as fast or faster
   // up to ~100k unknowns (the flow's local systems, B1's initial map); CHOLMOD's supernodal LLT with
   // METIS wins on the largest (B3's 150k-vertex initial map: 3.2 s vs 3.5 s). METIS only: CHOLMOD's
@@ -40,12 +58,13 @@ bool SpdSolver::compute(const SparseMatrix& A) {
 bool SpdSolver::refactor(const SparseMatrix& A) {
   // Same pattern as the last compute(): keep its ordering and symbolic analysis (METIS on a 150k
   // mesh costs as much as the numeric factorisation).
-  if (!impl_->ok) return compute(A);
+  if (!impl_->ok || !same_pattern(A, impl_->outer, impl_->inner)) return compute(A);
   if (impl_->use_fallback)
     impl_->fallback.factorize(A);
   else
     impl_->cholmod.factorize(A);
   impl_->ok = (impl_->use_fallback ? impl_->fallback.info() : impl_->cholmod.info()) == Eigen::Success;
+  if (!impl_->ok && !impl_->use_fallback) return compute(A);  // not definite for CHOLMOD: LDLᵀ
   return impl_->ok;
 }
 
@@ -57,15 +76,37 @@ MatrixXd SpdSolver::solve(const MatrixXd& B) const {
 }
 
 VectorXd levenberg_marquardt_step(const SparseMatrix& J, const VectorXd& r, int cg_iterations) {
-  const SparseMatrix Jt = J.transpose();
-  SparseMatrix N = Jt * J;
-  const VectorXd diag = N.diagonal();
-  for (Eigen::Index c = 0; c < N.rows(); ++c) N.coeffRef(c, c) += 1e-3 * diag[c] + 1e-18;
-  Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper> cg;
-  cg.setMaxIterations(cg_iterations);
-  cg.setTolerance(1e-4);
-  cg.compute(N);
-  return cg.solve(VectorXd(-(Jt * r)));
+  // Preconditioned CG on (Jᵀ J + μ D) δ = −Jᵀ r without forming Jᵀ J: each product is J p then
+  // Jᵀ (J p), 2 nnz(J) multiplications instead of nnz(Jᵀ J) ≈ 2.5 nnz(J) plus the sparse
+  // product per step (fs741 pial polish: the product and Jᵀ J's mat-vecs were 25 % of the map).
+  // Jacobi preconditioner, relative residual tolerance 1e-4, x0 = 0 (Eigen's ConjugateGradient).
+  const Eigen::Index n = J.cols();
+  const VectorXd d = J.cwiseAbs2().transpose() * VectorXd::Ones(J.rows());  // diag(Jᵀ J)
+  const VectorXd shift = 1e-3 * d.array() + 1e-18;
+  const VectorXd inv_m = (d + shift).cwiseInverse();
+  const VectorXd b = -(J.transpose() * r);
+  VectorXd x = VectorXd::Zero(n);
+  const double threshold = std::max(1e-8 * b.squaredNorm(), std::numeric_limits<double>::min());
+  VectorXd res = b;
+  if (!(res.squaredNorm() >= threshold)) return x;
+  VectorXd p = inv_m.cwiseProduct(res), z(n), Ap(n), Jp(J.rows());
+  double rz = res.dot(p);
+  // J p row by row (a row-major copy: gathers instead of scatters, and parallel like Jᵀ q).
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> Jr = J;
+  for (int it = 0; it < cg_iterations; ++it) {
+    Jp.noalias() = Jr * p;
+    Ap.noalias() = J.transpose() * Jp;
+    Ap += shift.cwiseProduct(p);
+    const double alpha = rz / p.dot(Ap);
+    x += alpha * p;
+    res -= alpha * Ap;
+    if (res.squaredNorm() < threshold) break;
+    z = inv_m.cwiseProduct(res);
+    const double rz_new = res.dot(z);
+    p = z + (rz_new / rz) * p;
+    rz = rz_new;
+  }
+  return x;
 }
 
 }  // namespace authalic

@@ -19,7 +19,9 @@ class SpdSolver {
 
   // Factorises A; false if neither CHOLMOD nor the fallback succeeds.
   bool compute(const SparseMatrix& A);
-  // Factorises A, which has the sparsity pattern of the last compute(), reusing its ordering.
+  // Factorises A reusing the ordering and symbolic analysis of the last compute() when A has its
+  // sparsity pattern (checked; otherwise this is compute(A)). A default-constructed solver
+  // computes on the first call, so one object can serve a sequence of systems of one mesh.
   bool refactor(const SparseMatrix& A);
   bool ok() const;
   MatrixXd solve(const MatrixXd& B) const;

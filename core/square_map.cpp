@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/sparse_cholesky.h"
 #include "core/stretch_energy.h"
 
 namespace authalic {
@@ -155,7 +156,8 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   }
   report(progress, "initial", -1, "conformal map");
   const auto t0 = std::chrono::steady_clock::now();
-  ConformalMapResult init = conformal_rectangle_map(V, F, b);
+  SpdSolver solver;  // one analysis for the conformal map's systems and the stretch-energy steps
+  ConformalMapResult init = conformal_rectangle_map(V, F, b, &solver);
   const auto t1 = std::chrono::steady_clock::now();
   R.surface_area = face_areas(init.V, init.F).sum();
   {
@@ -171,7 +173,7 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   MatrixXd start = init.UV;
   if (opt.stretch_start) {
     const VectorXd target = target_face_measure(init.V, init.F, fo.density, opt.width);
-    start = stretch_energy_map(init.V, init.F, target, init.UV, init.side_mask, opt.width, opt.stretch, &R.stretch);
+    start = stretch_energy_map(init.V, init.F, target, init.UV, init.side_mask, opt.width, opt.stretch, &R.stretch, &solver);
     std::ostringstream msg;
     msg << "stretch-energy start: " << R.stretch.iterations << " iterations, mean |ln stretch| per face "
         << R.stretch.initial_log_stretch << " -> " << R.stretch.final_log_stretch;

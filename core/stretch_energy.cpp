@@ -31,7 +31,7 @@ double mean_log_stretch(const VectorXd& map_area, const VectorXd& target) {
 
 MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd& face_target, const MatrixXd& UV0,
                             const VectorXi& side_mask, double width, const StretchEnergyOptions& opt,
-                            StretchEnergyReport* report) {
+                            StretchEnergyReport* report, SpdSolver* reuse) {
   const Eigen::Index nv = V.rows(), nf = F.rows();
   const MatrixXd W = surface_cot_weights(V, F, opt.min_weight);
   // Unknowns: the vertices used by F that are not on the boundary (side_mask 0).
@@ -95,7 +95,8 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
     for (const auto& x : tb) b_slot.push_back(slot_of(B, x.row(), x.col()));
   }
   VectorXd scale = VectorXd::Ones(nf);  // w_k / w_0 = Π σ_j per face
-  SpdSolver solver;                     // the pattern is the same every iteration: one analysis
+  SpdSolver local;  // the pattern is the same every iteration: one analysis (or the caller's)
+  SpdSolver& solver = reuse ? *reuse : local;
   for (int k = 0; k < opt.max_iterations && m > 0; ++k) {
     const double sa = area.sum();
     VectorXd trial(nf);
@@ -112,7 +113,7 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
       else
         L.valuePtr()[l_slot[n_l++]] += diagonal ? w : -w;
     });
-    if (!(k == 0 ? solver.compute(L) : solver.refactor(L))) break;
+    if (!solver.refactor(L)) break;
 
     // Boundary: slid along its sides by one Moser pass of the current map (Neumann velocity, so
     // corners stay), and only as far as the interior re-solve stays an embedding (halving).

@@ -17,6 +17,7 @@
 // failure of a uniform-grid flow on a native cortex, where the conformal start squeezes parts of
 // the cortex by 10^3).
 #include "core/mesh.h"
+#include "core/sparse_cholesky.h"
 
 namespace authalic {
 
@@ -48,6 +49,6 @@ struct StretchEnergyReport {
 // Output: #V x 2 map; the vertices not used by F and the fixed ones keep UV0.
 MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd& face_target, const MatrixXd& UV0,
                             const VectorXi& side_mask, double width, const StretchEnergyOptions& options = {},
-                            StretchEnergyReport* report = nullptr);
+                            StretchEnergyReport* report = nullptr, SpdSolver* solver = nullptr);
 
 }  // namespace authalic
