@@ -35,6 +35,7 @@ struct SampleArgs {
   bool trilinear = false;
   bool outward = false;
   std::string normalize = "none";
+  std::string cortex;  // the region --normalize global averages over
   std::string surface_to_volume;
   std::string register_t1;
   std::string map;
@@ -51,6 +52,19 @@ std::string matrix_text(const Eigen::Matrix4d& T) {
   return s.str();
 }
 
+// The triangles whose three vertices are all in `vertices` (a region given by its vertices).
+MatrixXi faces_inside(const MatrixXi& F, const std::vector<int>& vertices) {
+  std::vector<char> in(static_cast<std::size_t>(F.size() ? F.maxCoeff() + 1 : 0), 0);
+  for (int v : vertices)
+    if (v >= 0 && v < static_cast<int>(in.size())) in[static_cast<std::size_t>(v)] = 1;
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    if (in[F(f, 0)] && in[F(f, 1)] && in[F(f, 2)]) keep.push_back(f);
+  MatrixXi out(static_cast<Eigen::Index>(keep.size()), 3);
+  for (std::size_t k = 0; k < keep.size(); ++k) out.row(static_cast<Eigen::Index>(k)) = F.row(keep[k]);
+  return out;
+}
+
 std::string png_path_for(const std::string& out) {
   for (const std::string ext : {".func.gii", ".shape.gii", ".gii"})
     if (out.size() > ext.size() && out.compare(out.size() - ext.size(), ext.size(), ext) == 0)
@@ -60,12 +74,19 @@ std::string png_path_for(const std::string& out) {
 
 int run_sample(const SampleArgs& a) {
   const auto start = std::chrono::steady_clock::now();
-  io::check_file_roles({a.volume, a.surface, a.ribbon, a.surface_to_volume, a.register_t1, a.map},
+  io::check_file_roles({a.volume, a.surface, a.ribbon, a.surface_to_volume, a.register_t1, a.map, a.cortex},
                        {a.out, a.png.empty() ? png_path_for(a.out) : a.png});
   if (a.trilinear && !a.ribbon.empty()) throw InputError("--trilinear and --ribbon: choose one sampling mode");
   if (a.stat != "mean" && a.stat != "max") throw InputError("--stat: '" + a.stat + "' is not mean or max");
   if (!a.register_t1.empty() && !a.surface_to_volume.empty())
     throw InputError("--register and --surface-to-volume: give one (the registration computes the transform)");
+
+  // The whole surface includes the medial wall (fsaverage5: 4,002 of 10,242 vertices), whose
+  // values are not cortex: the global mean is taken over the cortex region, as `run` does.
+  if (a.normalize == "global" && a.cortex.empty())
+    throw InputError("--normalize global: give the cortex region of " + a.surface +
+                     " with --cortex (a FreeSurfer label such as lh.cortex.label, a GIFTI label or a mask); the mean over "
+                     "the whole surface would include the medial wall");
 
   io::VolumeReadOptions vo;
   vo.frame = a.frame;
@@ -127,8 +148,11 @@ int run_sample(const SampleArgs& a) {
   norm.units = volume.units.empty() ? "PET units" : volume.units;
   norm.description = "none: values in the PET's units";
   if (a.normalize == "global") {
+    const MatrixXi cortex_faces = faces_inside(surface.mesh.F, io::read_region_vertices(a.cortex, surface.mesh.num_vertices()));
+    if (cortex_faces.rows() == 0)
+      throw InputError(a.cortex + ": no triangle of " + a.surface + " has all its vertices in this region; give the cortex label of this surface");
     try {
-      norm = analysis::global_cortical_mean(result.values, V_world, surface.mesh.F);
+      norm = analysis::global_cortical_mean(result.values, V_world, cortex_faces);
     } catch (const InputError& e) {
       throw InputError(a.volume + " on " + a.surface + ": " + e.what());
     }
@@ -155,6 +179,7 @@ int run_sample(const SampleArgs& a) {
                  {"normalisation_reference_value", std::to_string(norm.reference_value)},
                  {"units", norm.units}};
   if (!a.ribbon.empty()) fo.metadata["ribbon_surface"] = a.ribbon;
+  if (a.normalize == "global") fo.metadata["normalisation_region"] = a.cortex;
   io::write_per_vertex(a.out, result.values, fo);
 
   // Picture: the flat map when given, else lateral and medial views of the surface.
@@ -239,9 +264,12 @@ const bool registered = register_command({40, [](CLI::App& parent) {
   sub->add_flag("--trilinear", a->trilinear, "The trilinear value at the vertex itself (no projection)");
   sub->add_flag("--outward", a->outward, "Project along the outward normal instead of inward");
   sub->add_option("--normalize,--normalise", a->normalize,
-                  "Intensity normalisation: none, global (divide by the area-weighted cortical mean), or a NIfTI mask of "
-                  "a reference region (e.g. cerebellum, pons; value > 0.5 inside) giving SUV ratios")
+                  "Intensity normalisation: none, global (divide by the area-weighted mean over the --cortex region), or a "
+                  "NIfTI mask of a reference region (e.g. cerebellum, pons; value > 0.5 inside) giving SUV ratios")
       ->capture_default_str();
+  sub->add_option("--cortex", a->cortex,
+                  "Cortex region of SURFACE for --normalize global (required there): FreeSurfer label (lh.cortex.label), "
+                  "GIFTI label or mask; the medial wall is left out of the mean, as in `run`");
   sub->add_option("--surface-to-volume", a->surface_to_volume,
                   "Text file with a 4x4 matrix (row by row) taking the surface's coordinates to the volume's world (scanner "
                   "RAS mm); default: the surface's own (FreeSurfer c_ras, else identity)");
