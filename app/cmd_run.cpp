@@ -2,6 +2,8 @@
 // 2 bad input (nothing written), 3 processing failure.
 #include <unistd.h>
 
+#include <cstdlib>
+
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -22,10 +24,15 @@ struct RunArgs {
 int run(RunArgs& a) {
   analysis::SubjectInputs in = a.inputs;
   if (!a.subjects_dir.empty() || !a.subject.empty()) {
-    if (a.subjects_dir.empty() || a.subject.empty())
-      throw InputError("--subjects-dir and --subject go together; give both, or the explicit --lh-white ... inputs");
+    // FreeSurfer's convention: without --subjects-dir, the SUBJECTS_DIR environment variable.
+    const char* env = std::getenv("SUBJECTS_DIR");
+    const std::string subjects_dir = !a.subjects_dir.empty() ? a.subjects_dir : (env ? env : "");
+    if (a.subject.empty())
+      throw InputError("--subjects-dir needs --subject (the subject's folder name); or give the explicit --lh-white ... inputs");
+    if (subjects_dir.empty())
+      throw InputError("--subject " + a.subject + ": give --subjects-dir or set SUBJECTS_DIR (FreeSurfer's subjects folder)");
     const std::string id = in.id;
-    in = analysis::inputs_from_subjects_dir(a.subjects_dir, a.subject);
+    in = analysis::inputs_from_subjects_dir(subjects_dir, a.subject);
     if (!id.empty()) in.id = id;
     in.pet = a.inputs.pet;
     in.normative = a.inputs.normative;
@@ -92,8 +99,8 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_option("--rh-pial", in.rh_pial, "Right pial surface");
   sub->add_option("--lh-cortex", in.lh_cortex, "Left cortex region: FreeSurfer label or GIFTI label/mask (its vertices), or a surface on the same vertices whose triangles are the cortex (.surf.gii, e.g. a flat patch); one disk");
   sub->add_option("--rh-cortex", in.rh_cortex, "Right cortex region");
-  sub->add_option("--subjects-dir", a->subjects_dir, "FreeSurfer SUBJECTS_DIR (instead of the six inputs above)");
-  sub->add_option("--subject", a->subject, "FreeSurfer subject name in --subjects-dir");
+  sub->add_option("--subjects-dir", a->subjects_dir, "FreeSurfer SUBJECTS_DIR (instead of the six inputs above); default: the SUBJECTS_DIR environment variable");
+  sub->add_option("--subject", a->subject, "FreeSurfer subject name in --subjects-dir (or $SUBJECTS_DIR)");
   sub->add_option("--pet", in.pet, "PET volume registered to the surfaces (NIfTI, MGH/MGZ, DICOM folder); world = scanner RAS");
   sub->add_option("--t1", in.t1, "T1 MRI the surfaces belong to: the PET is rigidly registered to it (ITK v4, Mattes mutual information) before sampling; without it the PET is assumed co-registered");
   sub->add_option("--normative", in.normative, "Normative reference (authalic normative build): adds z-scores");

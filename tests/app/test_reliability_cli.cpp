@@ -417,6 +417,19 @@ TEST(ReliabilityCli, GlobalNormalisationOfNoiseAroundZeroIsRefused) {
   EXPECT_FALSE(fs::exists(dir + "/s.func.gii"));
 }
 
+// Issue 15 item 17: FreeSurfer's SUBJECTS_DIR is honoured when --subjects-dir is absent, and
+// --subjects-dir wins over it.
+TEST(ReliabilityCli, SubjectsDirComesFromTheEnvironmentWhenNotGiven) {
+  const std::string dir = test::temp_dir("rel-subjects-dir");
+  const std::string pet = " --pet " + q(sample("sub-patient01/sub-patient01_pet.nii.gz")) + " --out " + q(dir + "/out");
+  expect_refused("SUBJECTS_DIR=" + q(dir + "/env") + " " + bin() + " run --subject bert" + pet,
+                 dir + "/env/bert: no such FreeSurfer subject folder", {});
+  expect_refused("SUBJECTS_DIR=" + q(dir + "/env") + " " + bin() + " run --subjects-dir " + q(dir + "/given") + " --subject bert" + pet,
+                 dir + "/given/bert: no such FreeSurfer subject folder", {});
+  expect_refused("env -u SUBJECTS_DIR " + bin() + " run --subject bert" + pet, "give --subjects-dir or set SUBJECTS_DIR", {});
+  EXPECT_FALSE(fs::exists(dir + "/out"));
+}
+
 // Issue 15 item 12: the global mean is over the cortex (the medial wall left out, as `run` does);
 // without the cortex region the normalisation is refused before anything is read or written.
 TEST(ReliabilityCli, GlobalNormalisationAveragesOverTheCortexOnly) {
