@@ -11,6 +11,7 @@
 #include "analysis/raster.h"
 #include "analysis/render.h"
 #include "io/atomic_file.h"
+#include "io/base64.h"
 
 namespace authalic::analysis {
 
@@ -86,67 +87,6 @@ std::string capitalised(std::string s) {
 
 }  // namespace
 
-std::string base64_encode(const std::vector<std::uint8_t>& bytes) {
-  static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
-  std::size_t i = 0;
-  for (; i + 2 < bytes.size(); i += 3) {
-    const std::uint32_t n = (bytes[i] << 16) | (bytes[i + 1] << 8) | bytes[i + 2];
-    out += table[(n >> 18) & 63];
-    out += table[(n >> 12) & 63];
-    out += table[(n >> 6) & 63];
-    out += table[n & 63];
-  }
-  if (i + 1 == bytes.size()) {
-    const std::uint32_t n = bytes[i] << 16;
-    out += table[(n >> 18) & 63];
-    out += table[(n >> 12) & 63];
-    out += "==";
-  } else if (i + 2 == bytes.size()) {
-    const std::uint32_t n = (bytes[i] << 16) | (bytes[i + 1] << 8);
-    out += table[(n >> 18) & 63];
-    out += table[(n >> 12) & 63];
-    out += table[(n >> 6) & 63];
-    out += '=';
-  }
-  return out;
-}
-
-std::vector<std::uint8_t> base64_decode(const std::string& text) {
-  auto value = [](char c) -> int {
-    if (c >= 'A' && c <= 'Z') return c - 'A';
-    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
-    if (c >= '0' && c <= '9') return c - '0' + 52;
-    if (c == '+') return 62;
-    if (c == '/') return 63;
-    return -1;
-  };
-  if (text.size() % 4 != 0) throw std::invalid_argument("base64: length is not a multiple of 4");
-  std::vector<std::uint8_t> out;
-  out.reserve(text.size() / 4 * 3);
-  for (std::size_t i = 0; i < text.size(); i += 4) {
-    int v[4];
-    int pad = 0;
-    for (int k = 0; k < 4; ++k) {
-      const char c = text[i + k];
-      if (c == '=' && i + 4 == text.size() && k >= 2) {
-        v[k] = 0;
-        ++pad;
-      } else {
-        if (pad > 0) throw std::invalid_argument("base64: data after padding");
-        v[k] = value(c);
-        if (v[k] < 0) throw std::invalid_argument("base64: invalid character");
-      }
-    }
-    const std::uint32_t n = (v[0] << 18) | (v[1] << 12) | (v[2] << 6) | v[3];
-    out.push_back(static_cast<std::uint8_t>((n >> 16) & 255));
-    if (pad < 2) out.push_back(static_cast<std::uint8_t>((n >> 8) & 255));
-    if (pad < 1) out.push_back(static_cast<std::uint8_t>(n & 255));
-  }
-  return out;
-}
-
 std::string html_escape(const std::string& text) {
   std::string out;
   out.reserve(text.size());
@@ -163,7 +103,7 @@ std::string html_escape(const std::string& text) {
   return out;
 }
 
-std::string png_data_uri(const io::RgbImage& image) { return "data:image/png;base64," + base64_encode(io::encode_png(image)); }
+std::string png_data_uri(const io::RgbImage& image) { return "data:image/png;base64," + io::base64_encode(io::encode_png(image)); }
 
 std::pair<double, double> robust_range(const VectorXd& values) {
   std::vector<double> v;

@@ -77,8 +77,6 @@ std::string report_html(const ReportData& data);
 void write_report(const std::string& path, const ReportData& data);
 
 // Helpers, public for tests and other pages.
-std::string base64_encode(const std::vector<std::uint8_t>& bytes);
-std::vector<std::uint8_t> base64_decode(const std::string& text);  // throws std::invalid_argument on bad input
 std::string html_escape(const std::string& text);
 // A PNG data URI for an <img src>.
 std::string png_data_uri(const io::RgbImage& image);

@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "io/base64.h"
 #include "io/io_internal.h"
 
 namespace authalic::io::detail {
@@ -810,33 +811,6 @@ bool xml_count(std::string_view tag, const char* name, u64& out, const std::stri
   if (words.size() != 1 || !parse_count(words[0], out))
     fail(path, "VTK XML PolyData " + std::string(name) + "=" + quoted(value) + " is not a non-negative integer", "the file is corrupt");
   return true;
-}
-
-// Decodes the base64 text at the start of `text` into `out` (stops at the first non-base64
-// character or '='); returns the number of bytes decoded.
-std::size_t base64_prefix(std::string_view text, unsigned char* out, std::size_t want) {
-  auto value = [](char c) -> int {
-    if (c >= 'A' && c <= 'Z') return c - 'A';
-    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
-    if (c >= '0' && c <= '9') return c - '0' + 52;
-    if (c == '+') return 62;
-    if (c == '/') return 63;
-    return -1;
-  };
-  std::size_t n = 0;
-  unsigned bits = 0;
-  int have = 0;
-  for (char c : text) {
-    const int v = value(c);
-    if (v < 0 || n == want) break;
-    bits = (bits << 6) | static_cast<unsigned>(v);
-    have += 6;
-    if (have >= 8) {
-      have -= 8;
-      out[n++] = static_cast<unsigned char>(bits >> have);
-    }
-  }
-  return n;
 }
 
 struct VtpLayout {

@@ -9,11 +9,13 @@
 #include <sstream>
 
 #include "analysis/report.h"
+#include "io/base64.h"
 #include "common/test_data.h"
 
 namespace {
 
 namespace an = authalic::analysis;
+namespace io = authalic::io;
 using authalic::MatrixXd;
 using authalic::MatrixXi;
 using authalic::VectorXd;
@@ -184,7 +186,7 @@ an::ReportData example_report(bool normative) {
 }
 
 TEST(Base64, Rfc4648Vectors) {
-  auto enc = [](const std::string& s) { return an::base64_encode(std::vector<std::uint8_t>(s.begin(), s.end())); };
+  auto enc = [](const std::string& s) { return io::base64_encode(std::vector<std::uint8_t>(s.begin(), s.end())); };
   EXPECT_EQ(enc(""), "");
   EXPECT_EQ(enc("f"), "Zg==");
   EXPECT_EQ(enc("fo"), "Zm8=");
@@ -193,9 +195,15 @@ TEST(Base64, Rfc4648Vectors) {
   EXPECT_EQ(enc("fooba"), "Zm9vYmE=");
   EXPECT_EQ(enc("foobar"), "Zm9vYmFy");
   const std::vector<std::uint8_t> bytes = {0, 255, 128, 7, 63, 200, 1};
-  EXPECT_EQ(an::base64_decode(an::base64_encode(bytes)), bytes);
-  EXPECT_THROW(an::base64_decode("Zm9"), std::invalid_argument);
-  EXPECT_THROW(an::base64_decode("Zm9*"), std::invalid_argument);
+  EXPECT_EQ(io::base64_decode(io::base64_encode(bytes)), bytes);
+  EXPECT_THROW(io::base64_decode("Zm9"), std::invalid_argument);
+  EXPECT_THROW(io::base64_decode("Zm9*"), std::invalid_argument);
+  // The VTK reader's lenient prefix: stops at '=', at a non-digit, or at the bytes wanted.
+  unsigned char buf[8] = {};
+  EXPECT_EQ(io::base64_prefix("Zm9vYg==", buf, 8), 4u);
+  EXPECT_EQ(std::string(reinterpret_cast<char*>(buf), 4), "foob");
+  EXPECT_EQ(io::base64_prefix("Zm9vYmFy", buf, 2), 2u);
+  EXPECT_EQ(io::base64_prefix("Zm9v\nYmFy", buf, 8), 3u);
 }
 
 TEST(Report, WellFormedSelfContainedWithAllSections) {
@@ -238,7 +246,7 @@ TEST(Report, EmbeddedImagesDecodeAsPng) {
     const std::string& src = img.at("src");
     const std::string prefix = "data:image/png;base64,";
     ASSERT_EQ(src.compare(0, prefix.size(), prefix), 0) << "image " << k << " is not an embedded PNG";
-    const std::vector<std::uint8_t> png = an::base64_decode(src.substr(prefix.size()));
+    const std::vector<std::uint8_t> png = io::base64_decode(src.substr(prefix.size()));
     ASSERT_GT(png.size(), 8u);
     EXPECT_EQ(png[0], 0x89);
     EXPECT_EQ(png[1], 'P');
