@@ -52,19 +52,6 @@ std::string matrix_text(const Eigen::Matrix4d& T) {
   return s.str();
 }
 
-// The triangles whose three vertices are all in `vertices` (a region given by its vertices).
-MatrixXi faces_inside(const MatrixXi& F, const std::vector<int>& vertices) {
-  std::vector<char> in(static_cast<std::size_t>(F.size() ? F.maxCoeff() + 1 : 0), 0);
-  for (int v : vertices)
-    if (v >= 0 && v < static_cast<int>(in.size())) in[static_cast<std::size_t>(v)] = 1;
-  std::vector<Eigen::Index> keep;
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    if (in[F(f, 0)] && in[F(f, 1)] && in[F(f, 2)]) keep.push_back(f);
-  MatrixXi out(static_cast<Eigen::Index>(keep.size()), 3);
-  for (std::size_t k = 0; k < keep.size(); ++k) out.row(static_cast<Eigen::Index>(k)) = F.row(keep[k]);
-  return out;
-}
-
 std::string png_path_for(const std::string& out) {
   for (const std::string ext : {".func.gii", ".shape.gii", ".gii"})
     if (out.size() > ext.size() && out.compare(out.size() - ext.size(), ext.size(), ext) == 0)
@@ -148,11 +135,15 @@ int run_sample(const SampleArgs& a) {
   norm.units = volume.units.empty() ? "PET units" : volume.units;
   norm.description = "none: values in the PET's units";
   if (a.normalize == "global") {
-    const MatrixXi cortex_faces = faces_inside(surface.mesh.F, io::read_region_vertices(a.cortex, surface.mesh.num_vertices()));
-    if (cortex_faces.rows() == 0)
+    std::vector<bool> in_cortex(static_cast<std::size_t>(surface.mesh.num_vertices()), false);
+    for (int v : io::read_region_vertices(a.cortex, surface.mesh.num_vertices())) in_cortex[static_cast<std::size_t>(v)] = true;
+    const Submesh cortex = submesh_from_vertices(TriMesh{V_world, surface.mesh.F}, in_cortex);
+    if (cortex.mesh.F.rows() == 0)
       throw InputError(a.cortex + ": no triangle of " + a.surface + " has all its vertices in this region; give the cortex label of this surface");
+    VectorXd cortex_values(cortex.vertex_to_parent.size());
+    for (Eigen::Index i = 0; i < cortex_values.size(); ++i) cortex_values[i] = result.values[cortex.vertex_to_parent[i]];
     try {
-      norm = analysis::global_cortical_mean(result.values, V_world, cortex_faces);
+      norm = analysis::global_cortical_mean(cortex_values, cortex.mesh.V, cortex.mesh.F);
     } catch (const InputError& e) {
       throw InputError(a.volume + " on " + a.surface + ": " + e.what());
     }

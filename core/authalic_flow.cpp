@@ -84,23 +84,9 @@ int faces_outside_band(const VectorXd& target, const MatrixXd& UV, const MatrixX
   return bad;
 }
 
-// Mean, 99th percentile (linear interpolation, as abs_stats) and max of |r| over its finite
-// values: selection instead of abs_stats' full sort (it runs several times per polish step).
 Stats vertex_stats(const VectorXd& r) {
-  std::vector<double> a;
-  a.reserve(static_cast<std::size_t>(r.size()));
-  double sum = 0;
-  for (Eigen::Index i = 0; i < r.size(); ++i)
-    if (std::isfinite(r[i])) a.push_back(std::abs(r[i])), sum += a.back();  // index order: thread independent
-  if (a.empty()) return {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(),
-                         std::numeric_limits<double>::quiet_NaN()};
-  const double pos = (a.size() - 1) * 0.99;
-  const auto lo = static_cast<std::size_t>(std::floor(pos));
-  std::nth_element(a.begin(), a.begin() + lo, a.end());
-  const double a_lo = a[lo];
-  const double a_hi = lo + 1 < a.size() ? *std::min_element(a.begin() + lo + 1, a.end()) : a_lo;
-  const double a_max = lo + 1 < a.size() ? *std::max_element(a.begin() + lo + 1, a.end()) : a_lo;
-  return {sum / a.size(), a_lo + (pos - lo) * (a_hi - a_lo), a_max};
+  const AbsStats s = abs_stats(r);
+  return {s.mean, s.p99, s.max};
 }
 
 // Keeps boundary vertices on their side (corners fixed) and everything inside the rectangle.
@@ -352,10 +338,9 @@ double adaptive_step(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, d
 // (the stall measured with one global step, issue 3), and no triangle can flip.
 // theta <= 0: no critical-step limit, only the end state is checked (for the grid pass, whose
 // vertices travel on curved paths, so the straight-path critical steps do not apply).
-// face_floor (optional): per-face areas a step may not thin a triangle to (one above it before the
-// step stays above it), e.g. the float32 floor of the stored map.
+// face_limit (optional): per-face signed area each triangle must stay above, instead of min_area.
 MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta,
-                              const VectorXi& side_mask, double w, double min_area, const VectorXd* face_floor = nullptr) {
+                              const VectorXi& side_mask, double w, double min_area, const VectorXd* face_limit = nullptr) {
   const Eigen::Index nv = UV.rows(), nf = F.rows();
   VectorXd crit = VectorXd::Constant(nf, kInf);
 #pragma omp parallel for schedule(static)
@@ -378,18 +363,12 @@ MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const Matri
     out(v, 1) = y;
   };
   for (Eigen::Index v = 0; v < nv; ++v) place(v);
-  VectorXd limit = VectorXd::Constant(nf, min_area);
-  if (face_floor) {
-    const VectorXd a0 = signed_face_areas_2d(UV, F);
-    for (Eigen::Index f = 0; f < nf; ++f)
-      if (a0[f] > (*face_floor)[f]) limit[f] = std::max(min_area, (*face_floor)[f]);
-  }
   VectorXd a;
   halve_steps_until_unfolded(
       F, lam,
       [&](Eigen::Index f) {
         if (f == 0) a = signed_face_areas_2d(out, F);  // once per round
-        return !(a[f] > limit[f]);
+        return !(a[f] > (face_limit ? (*face_limit)[f] : min_area));
       },
       place);
   return out;
@@ -851,13 +830,18 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
     double cur_face = face_log_ratio_mean(target, UV, F);
     // Halving line search on a polish step D: the first scale (1, 1/2, 1/4) whose flip-safe
     // positions `accept` takes (it sets their per-face error and per-vertex stats) is kept.
-    // No step thins a triangle below what float32 storage keeps oriented (twice that floor, as the
-    // floor moves with the vertices): opening such slivers afterwards can fail and fall back to
-    // untangling, which costs area (see core/square_map.cpp).
+    // No step thins a triangle that is above twice its float32 floor (twice, as the floor moves
+    // with the vertices) below it: opening such slivers afterwards can fail and fall back to
+    // untangling, which costs area (see core/square_map.cpp). One limit per line search.
     auto line_search = [&](const MatrixXd& D, const std::function<bool(const MatrixXd&, double&, Stats&)>& accept) {
-      const VectorXd floor = opt.polish_float32_floor ? VectorXd(2.0 * single_precision_area_floor(UV, F)) : VectorXd::Zero(F.rows());
+      VectorXd limit = VectorXd::Constant(F.rows(), min_area);
+      if (opt.polish_float32_floor) {
+        const VectorXd floor = 2.0 * single_precision_area_floor(UV, F), a0 = signed_face_areas_2d(UV, F);
+        for (Eigen::Index f = 0; f < F.rows(); ++f)
+          if (a0[f] > floor[f]) limit[f] = std::max(min_area, floor[f]);
+      }
       for (double scale = 1.0; scale > 0.1; scale *= 0.5) {
-        MatrixXd next = local_step_positions(UV, F, scale * D, opt.theta, side_mask, w, min_area, &floor);
+        MatrixXd next = local_step_positions(UV, F, scale * D, opt.theta, side_mask, w, min_area, &limit);
         double fm = 0;
         Stats st;
         if (!accept(next, fm, st)) continue;
