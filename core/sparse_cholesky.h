@@ -1,8 +1,8 @@
 #pragma once
 // Sparse symmetric positive definite solves for the map cores: Eigen's simplicial LDLᵀ up to 100k
-// unknowns, CHOLMOD's supernodal Cholesky with nested-dissection (METIS) ordering above (falling
-// back to LDLᵀ if CHOLMOD reports the matrix not positive definite). Results do not depend on the
-// OpenMP thread count (Debian's reference BLAS is serial).
+// unknowns, CHOLMOD's simplicial Cholesky with nested-dissection (METIS) ordering above (falling
+// back to LDLᵀ if CHOLMOD reports the matrix not positive definite). No BLAS is involved, so results
+// do not depend on the OpenMP thread count or on which BLAS the machine has.
 #include <memory>
 
 #include "core/mesh.h"
