@@ -19,6 +19,7 @@ py=/usr/bin/python3
 [ -x "$bin" ] || { echo "bench_real: $bin not found; build first (scripts/build.sh)" >&2; exit 2; }
 [ -f "$data/lh.white.surf.gii" ] || { echo "bench_real: $data not found (../shared/data is needed)" >&2; exit 2; }
 work=$(mktemp -d)
+load_start=$(cut -d" " -f1-3 /proc/loadavg)
 trap 'rm -rf "$work"' EXIT
 
 # run NAME SURFACE REGION : flatten with /usr/bin/time; leaves $work/NAME.{json,uv.surf.gii,time,code}
@@ -75,7 +76,7 @@ set +e
 echo $? >"$work/run.code"
 set -e
 
-$py - "$work" <<'EOF'
+$py - "$work" "$load_start" <<'EOF'
 import json, os, re, sys
 work = sys.argv[1]
 def timing(name):
@@ -135,6 +136,8 @@ print(f"\nrun on the subject (left + mirror, SPM PET): exit {code}, {wall:.1f} s
 reqs += [("run exit code", code, 0), ("run wall s", wall, 60.0), ("run report written", 0 if report else 1, 0)]
 if len(cvs) == 3:
     reqs += [("rectangle (two hemispheres) element CV", float(cvs[2]), 0.005)]
+print(f"\nload average (1, 5, 15 min) at the start: {sys.argv[2]}, at the end: {' '.join(open('/proc/loadavg').read().split()[:3])} "
+      f"on {os.cpu_count()} cores (the wall-time rows assume a quiet machine: other work makes every one larger)")
 print("\nrequirements (real-mesh issue):")
 for name, value, limit in reqs:
     ok = value == value and value <= limit
