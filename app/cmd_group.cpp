@@ -114,7 +114,7 @@ std::vector<std::string> subject_args(const std::string& exe, const CohortSubjec
                                       const std::string& out) {
   std::vector<std::string> args = {exe, "run", "--id", s.id, "--lh-white", s.lh_white, "--lh-pial", s.lh_pial, "--rh-white", s.rh_white,
           "--rh-pial", s.rh_pial, "--lh-cortex", s.lh_cortex, "--rh-cortex", s.rh_cortex, "--pet", s.pet,
-          "--k", std::to_string(k), "--threads", std::to_string(threads), "--out", out, "--force", "--quiet"};
+          "--k", std::to_string(k), "--threads", std::to_string(threads), "--out", out, "--force"};  // progress lines into the log
   if (s.age > 0) args.insert(args.end(), {"--age", std::to_string(s.age)});  // unknown: left out
   return args;
 }
@@ -170,7 +170,6 @@ int run_group(const GroupArgs& a) {
   summary["controls_used"] = used;
   int reference_exit = -1;
   if (used >= analysis::kMinControls) {
-    build.push_back("--quiet");
     Job ref;
     ref.id = "reference";
     ref.argv = build;
@@ -209,7 +208,7 @@ const bool registered = register_command({60, [](CLI::App& parent) {
       "Run the per-subject pipeline for a cohort (controls first), build the normative reference from the "
       "controls, then compare the patients with it. COHORT.csv columns: subject_id,role(control|patient),age,"
       "pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex (paths relative to the CSV). Writes "
-      "OUT/controls/sub-<id>/, OUT/patients/sub-<id>/, OUT/normative.json and OUT/logs/<id>.log. "
+      "OUT/controls/sub-<id>/, OUT/patients/sub-<id>/, OUT/normative.json and OUT/logs/<id>.log (each subject's progress and messages). "
       "A failed subject is reported and does not stop the others (exit 3 at the end).");
   sub->add_option("cohort", args->cohort, "Cohort list (CSV)")->required()->check(CLI::ExistingFile);
   sub->add_option("out", args->out, "Output folder")->required();

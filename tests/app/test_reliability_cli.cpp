@@ -573,5 +573,31 @@ TEST(ReliabilityCli, KilledGroupTakesItsRunningSubjectsWithIt) {
   EXPECT_FALSE(any_alive) << "a child run outlived the killed group";
 }
 
+// Item 17 (issue 15): every subject's log holds its run's progress, the failed and the successful
+// ones alike (they were empty for successes: the children ran with --quiet); a comparison into a
+// missing folder and an output folder that cannot be made are one line each, exit 2.
+TEST(ReliabilityCli, GroupLogsEverySubjectAndMissingOutputFoldersAreOneLine) {
+  const std::string dir = test::temp_dir("rel-group-logs");
+  std::string out;
+  ASSERT_EQ(test::run_command(bin() + " phantom --synthetic --controls 3 --patients 1 -q " + q(dir + "/ph"), &out), 0) << out;
+  ASSERT_EQ(test::run_command(bin() + " group " + q(dir + "/ph/cohort.csv") + " " + q(dir + "/g") + " -q", &out), 0) << out;
+  for (const std::string id : {"control01", "control02", "control03", "patient01"}) {
+    std::ifstream log(dir + "/g/logs/" + id + ".log");
+    ASSERT_TRUE(log.good()) << id;
+    const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("run: authalic square map (left)"), std::string::npos) << id << ":\n" << text;
+    EXPECT_NE(text.find("sub-" + id), std::string::npos) << id << ":\n" << text;
+  }
+  std::ifstream ref(dir + "/g/logs/normative.log");
+  const std::string ref_text((std::istreambuf_iterator<char>(ref)), std::istreambuf_iterator<char>());
+  EXPECT_NE(ref_text.find("3 subjects"), std::string::npos) << ref_text;
+
+  const std::string table = dir + "/g/patients/sub-patient01/sub-patient01_elements.csv";
+  expect_refused(bin() + " normative compare " + q(dir + "/g/normative.json") + " " + q(table) + " " + q(dir + "/none/x"),
+                 "folder " + dir + "/none does not exist; create it first", {table});
+  EXPECT_FALSE(fs::exists(dir + "/none"));
+  expect_refused(run_args("/proc/authalic-out"), "/proc/authalic-out: cannot create the output folder", {});
+}
+
 }  // namespace
 }  // namespace authalic
