@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "analysis/cortex_region.h"
 #include "analysis/elements.h"
 #include "analysis/normative.h"
 #include "analysis/render.h"
@@ -129,13 +130,6 @@ void check_anatomy(const Hemisphere (&hemis)[2], const SubjectInputs& in) {
   }
 }
 
-// Surface files name the cortex by their triangles; labels and masks by their vertices.
-bool is_surface_file(const std::string& path) {
-  for (const char* ext : {".surf.gii", ".surf.gii.gz", ".vtk", ".vtp", ".ply", ".obj", ".stl"})
-    if (path.size() >= std::strlen(ext) && path.compare(path.size() - std::strlen(ext), std::string::npos, ext) == 0) return true;
-  return false;
-}
-
 // Reads one hemisphere; returns a line for the log saying how a vertex label was cleaned up
 // into one disk (core/region.h), empty for a face set.
 std::string load_hemisphere(Hemisphere& h, const std::string& white, const std::string& pial, const std::string& cortex) {
@@ -145,45 +139,15 @@ std::string load_hemisphere(Hemisphere& h, const std::string& white, const std::
   if (h.pial.mesh.num_vertices() != n)
     throw InputError(pial + ": has " + std::to_string(h.pial.mesh.num_vertices()) + " vertices but " + white + " has " +
                      std::to_string(n) + "; white and pial must come from the same subject and hemisphere");
-  std::string note;
-  if (is_surface_file(cortex)) {
-    // A surface on the same vertices whose triangles are the cortex (e.g. FreeSurfer's flat
-    // patch as GIFTI): its face set is the region, as `authalic flatten --faces-from`.
-    const io::Surface region = io::read_surface(cortex);
-    if (region.mesh.num_vertices() != n)
-      throw InputError(cortex + ": has " + std::to_string(region.mesh.num_vertices()) + " vertices but " + white + " has " +
-                       std::to_string(n) + "; a cortex face set must be on the white surface's vertices");
-    h.cortex_faces = region.mesh.F;
-    const TopologyReport t = analyze_topology(h.white.mesh.V, h.cortex_faces);
-    if (!t.is_disk())
-      throw InputError(cortex + ": the cortex region on " + white + " is not one disk (" + t.summary() +
-                       "); the map needs a region with one boundary loop, e.g. FreeSurfer's ?h.cortex.label");
-  } else {
-    // A label or mask (vertices): its whole triangles, cleaned up into one disk (islands dropped,
-    // small holes filled, pinch vertices resolved), as `authalic flatten --label`.
-    const std::vector<int> label = io::read_region_vertices(cortex, n);
-    std::vector<bool> in(n, false);
-    for (int v : label) in[v] = true;
-    const RegionCleanup c = region_faces_from_vertices(h.white.mesh.V, h.white.mesh.F, in);
-    if (c.F.rows() == 0)
-      throw InputError(cortex + ": the label's " + std::to_string(label.size()) + " vertices contain no whole triangle of " +
-                       white + "; check that the label belongs to this surface");
-    if (!c.is_disk())
-      throw InputError(cortex + " on " + white + ": " + c.problem() +
-                       "; the map needs a region with one boundary loop, e.g. FreeSurfer's ?h.cortex.label");
-    h.cortex_faces = c.F;
-    std::ostringstream line;
-    line << h.name << " cortex " << fs::path(cortex).filename().string() << ": " << label.size() << " label vertices, "
-         << c.F.rows() << " faces, " << std::fixed << std::setprecision(1) << c.area_mm2 << " mm^2; " << c.summary();
-    note = line.str();
-  }
+  CortexRegion region = read_cortex_region(h.white.mesh, white, cortex, h.name);
+  h.cortex_faces = std::move(region.F);
   std::vector<char> used(n, 0);
   for (Eigen::Index f = 0; f < h.cortex_faces.rows(); ++f)
     for (int c = 0; c < 3; ++c) used[h.cortex_faces(f, c)] = 1;
   h.cortex.clear();
   for (int v = 0; v < n; ++v)
     if (used[v]) h.cortex.push_back(v);
-  return note;
+  return region.note;
 }
 
 }  // namespace

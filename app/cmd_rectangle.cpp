@@ -2,6 +2,7 @@
 // (core/rectangle_map.h), in two forms:
 //   authalic rectangle OUT.surf.gii --surface S [--cut-from V --cut-to V]
 //   authalic rectangle OUT_PREFIX --lh S --lh-faces-from F --rh S --rh-faces-from F
+//   authalic rectangle OUT_PREFIX --lh S --lh-cortex L --rh S --rh-cortex L
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -9,6 +10,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "analysis/cortex_region.h"
 #include "analysis/render.h"
 #include "analysis/report.h"
 #include "app/command.h"
@@ -28,7 +30,7 @@ struct RectangleArgs {
   std::string out;
   std::string surface;
   int cut_from = -1, cut_to = -1;
-  std::string lh, lh_faces, rh, rh_faces;
+  std::string lh, lh_faces, lh_cortex, rh, rh_faces, rh_cortex;
   std::string metrics, png, histogram;
   std::string sulc, lh_sulc, rh_sulc;
   bool flat = false;
@@ -73,7 +75,10 @@ VectorXd part_values(const RectanglePart& p, const VectorXd& values) {
   return out;
 }
 
-TriMesh read_cortex(const std::string& surface_path, const std::string& faces_path, io::Surface* surface) {
+// The hemisphere's surface with its cortex faces: from a face set (--?h-faces-from), a cortex
+// label, mask or face set (--?h-cortex, cleaned up into one disk as `run` does), or all its faces.
+TriMesh read_cortex(const std::string& surface_path, const std::string& faces_path, const std::string& cortex_path,
+                    const std::string& name, io::Surface* surface) {
   *surface = io::read_surface(surface_path);
   TriMesh cortex = surface->mesh;
   if (!faces_path.empty()) {
@@ -82,6 +87,10 @@ TriMesh read_cortex(const std::string& surface_path, const std::string& faces_pa
       throw InputError(faces_path + ": has " + std::to_string(faces.mesh.num_vertices()) + " vertices but " + surface_path +
                        " has " + std::to_string(cortex.num_vertices()) + "; the face set must be on the same vertices");
     cortex.F = faces.mesh.F;
+  } else if (!cortex_path.empty()) {
+    analysis::CortexRegion region = analysis::read_cortex_region(cortex, surface_path, cortex_path, name);
+    if (!region.note.empty()) info("rectangle: " + region.note);
+    cortex.F = std::move(region.F);
   }
   return cortex;
 }
@@ -297,8 +306,8 @@ void run_one_surface(const RectangleArgs& a) {
 void run_two_hemispheres(const RectangleArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   io::Surface ls, rs;
-  const TriMesh left = read_cortex(a.lh, a.lh_faces, &ls);
-  const TriMesh right = read_cortex(a.rh, a.rh_faces, &rs);
+  const TriMesh left = read_cortex(a.lh, a.lh_faces, a.lh_cortex, "left", &ls);
+  const TriMesh right = read_cortex(a.rh, a.rh_faces, a.rh_cortex, "right", &rs);
   HemisphereRectangles r;
   try {
     r = hemisphere_rectangle_map(left, right, {}, terminal_progress());
@@ -350,8 +359,16 @@ void setup(CLI::App& parent) {
   sub->add_option("--cut-to", a->cut_to, "Posterior cut vertex (default: the inferior-medial landmark rule)")->check(CLI::NonNegativeNumber)->needs(surface);
   auto* lh = sub->add_option("--lh", a->lh, "Left hemisphere surface (mm)");
   auto* rh = sub->add_option("--rh", a->rh, "Right hemisphere surface (mm)");
-  sub->add_option("--lh-faces-from", a->lh_faces, "Cortex face set of the left hemisphere: a surface on the same vertices (e.g. flat_left.gii.gz)")->needs(lh);
-  sub->add_option("--rh-faces-from", a->rh_faces, "Cortex face set of the right hemisphere (same vertices as --rh)")->needs(rh);
+  auto* lh_faces = sub->add_option("--lh-faces-from", a->lh_faces,
+                                   "Cortex face set of the left hemisphere: a surface on the same vertices (e.g. flat_left.gii.gz)")
+                       ->needs(lh);
+  auto* rh_faces = sub->add_option("--rh-faces-from", a->rh_faces, "Cortex face set of the right hemisphere (same vertices as --rh)")->needs(rh);
+  sub->add_option("--lh-cortex", a->lh_cortex,
+                  "Cortex of the left hemisphere as `run` takes it: FreeSurfer label (lh.cortex.label), GIFTI label or 0/1 mask "
+                  "(cleaned up into one disk: islands dropped, small holes filled), or a face set on the same vertices")
+      ->needs(lh)
+      ->excludes(lh_faces);
+  sub->add_option("--rh-cortex", a->rh_cortex, "Cortex of the right hemisphere (as --lh-cortex)")->needs(rh)->excludes(rh_faces);
   lh->needs(rh);
   rh->needs(lh);
   surface->excludes(lh)->excludes(rh);
@@ -378,7 +395,7 @@ void setup(CLI::App& parent) {
   add_common_options(*sub);
   sub->callback([a]() {
     if (a->surface.empty() && a->lh.empty()) throw InputError("rectangle: give --surface S, or --lh S --rh S (see --help)");
-    io::check_file_roles({a->surface, a->lh, a->rh, a->lh_faces, a->rh_faces, a->sulc, a->lh_sulc, a->rh_sulc}, output_paths(*a));
+    io::check_file_roles({a->surface, a->lh, a->rh, a->lh_faces, a->rh_faces, a->lh_cortex, a->rh_cortex, a->sulc, a->lh_sulc, a->rh_sulc}, output_paths(*a));
     if (!a->surface.empty()) {
       run_one_surface(*a);
     } else {

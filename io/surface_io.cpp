@@ -328,7 +328,15 @@ std::vector<int> read_region_vertices(const std::string& path, int expected_vert
     } else {
       values = read_per_vertex(path, expected_vertices);
     }
-    // Label files: any non-zero key is inside. Masks: value > 0.5 (robust to float rounding).
+    // Label files: any non-zero key is inside. Masks: value > 0.5 (robust to float rounding; a
+    // probability map is thresholded at one half). Values outside [0, 1] are per-vertex data
+    // (sulc, curv, thickness), never a mask: refused, not thresholded into some region.
+    if (!labels && values.rows() > 0) {
+      const double lo = values.col(0).minCoeff(), hi = values.col(0).maxCoeff();
+      if (!(lo >= -1e-6 && hi <= 1.0 + 1e-6))
+        fail(path, "values from " + std::to_string(lo) + " to " + std::to_string(hi) + " are not a 0/1 mask (per-vertex data such as sulc or thickness?)",
+             "give the cortex as a FreeSurfer .label, a .label.gii or a 0/1 .shape.gii mask");
+    }
     for (Eigen::Index i = 0; i < values.rows(); ++i)
       if (labels ? values(i, 0) != 0.0 : values(i, 0) > 0.5) vertices.push_back(static_cast<int>(i));
   }
@@ -336,6 +344,36 @@ std::vector<int> read_region_vertices(const std::string& path, int expected_vert
   vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
   if (vertices.empty()) fail(path, "region is empty (no vertex selected)", "check that this is the right label or mask");
   return vertices;
+}
+
+RegionFile read_region_file(const std::string& path, int expected_vertices) {
+  const std::string bytes = detail::read_file(path);
+  RegionFile r;
+  switch (sniff_surface(bytes, path)) {
+    case SurfaceFormat::kGifti: {
+      detail::GiftiContents g = detail::read_gifti(path);
+      if (!g.has_mesh) break;  // a label or mask
+      r.is_face_set = true;
+      r.face_set_vertices = g.mesh.num_vertices();
+      r.faces = std::move(g.mesh.F);
+      return r;
+    }
+    case SurfaceFormat::kFreeSurfer:
+    case SurfaceFormat::kVtk:
+    case SurfaceFormat::kVtp:
+    case SurfaceFormat::kPly:
+    case SurfaceFormat::kObj:
+    case SurfaceFormat::kStl: {
+      const Surface s = read_surface(path);
+      r.is_face_set = true;
+      r.face_set_vertices = s.mesh.num_vertices();
+      r.faces = s.mesh.F;
+      return r;
+    }
+    default: break;  // labels, masks, curv-style per-vertex files
+  }
+  r.vertices = read_region_vertices(path, expected_vertices);
+  return r;
 }
 
 Label read_freesurfer_label(const std::string& path) { return detail::parse_freesurfer_label(detail::read_file(path), path); }

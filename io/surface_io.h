@@ -96,6 +96,18 @@ void write_label_gifti(const std::string& path, const VectorXi& labels, const st
 // file (non-zero keys) or a GIFTI shape/func mask (values > 0.5). Indices are 0-based.
 std::vector<int> read_region_vertices(const std::string& path, int expected_vertices = -1);
 
+// A cortex region file of either kind, told apart by its content (not its name): a surface whose
+// triangles are the region (a face set on the same vertices, e.g. FreeSurfer's flat patch saved
+// as GIFTI, flat_left.gii.gz) or vertices (read_region_vertices). A face set's vertex count is
+// returned, not checked: the caller names both files when it does not match.
+struct RegionFile {
+  bool is_face_set = false;
+  MatrixXi faces;              // face set: #F x 3
+  int face_set_vertices = 0;   // face set: the surface's vertex count
+  std::vector<int> vertices;   // otherwise: sorted 0-based indices
+};
+RegionFile read_region_file(const std::string& path, int expected_vertices = -1);
+
 // FreeSurfer label file: vertex indices and their coordinates/values.
 struct Label {
   std::vector<int> vertices;

@@ -284,6 +284,46 @@ TEST(RectangleCli, OneClosedSurfaceCutOpenFillsTheRectangle) {
   EXPECT_NE(output.find("at least 3"), std::string::npos) << output;
 }
 
+// Issue 15 item 16: `rectangle --lh/--rh` takes the cortex as `run` does: a FreeSurfer label
+// (cleaned up into one disk, with its line) or a face set by content; never with --?h-faces-from.
+TEST(RectangleCli, TwoHemispheresTakeTheirCortexAsLabels) {
+  const std::string dir = authalic::test::temp_dir("rectangle_cli_labels");
+  const std::string s = std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/";
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " rectangle " + dir + "/brain --lh " + s + "surf/lh.white --rh " + s +
+                            "surf/rh.white --lh-cortex " + s + "label/lh.cortex.label --rh-cortex " + s +
+                            "label/rh.cortex.label --metrics " + dir + "/m.json",
+                        &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("rectangle: left cortex lh.cortex.label: 3579 label vertices"), std::string::npos) << output;
+  EXPECT_NE(output.find("rectangle: right cortex rh.cortex.label"), std::string::npos) << output;
+  const auto j = read_json(dir + "/m.json");
+  EXPECT_EQ(j.at("metrics").at("flips"), 0);
+  EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.01);
+  // The same region as a face set under a name that says nothing of it: the same map.
+  const auto white = authalic::io::read_surface(s + "surf/lh.white");
+  const auto left = authalic::io::read_surface(dir + "/brain.lh.surf.gii");
+  EXPECT_EQ(left.mesh.num_vertices(), white.mesh.num_vertices());
+  authalic::TriMesh faces = white.mesh;
+  faces.F = left.mesh.F;
+  authalic::io::write_surface(dir + "/lh_cortex.gii", faces);
+  ASSERT_EQ(run_command(authalic_binary() + " rectangle " + dir + "/again --lh " + s + "surf/lh.white --rh " + s +
+                            "surf/rh.white --lh-cortex " + dir + "/lh_cortex.gii --rh-cortex " + s + "label/rh.cortex.label -q",
+                        &output),
+            0)
+      << output;
+  const auto again = authalic::io::read_surface(dir + "/again.lh.surf.gii");
+  EXPECT_TRUE(again.mesh.V.isApprox(left.mesh.V, 1e-6));
+  EXPECT_EQ(run_command(authalic_binary() + " rectangle " + dir + "/x --lh " + s + "surf/lh.white --rh " + s +
+                            "surf/rh.white --lh-cortex " + s + "label/lh.cortex.label --lh-faces-from " + dir +
+                            "/lh_cortex.gii --rh-cortex " + s + "label/rh.cortex.label",
+                        &output),
+            2)
+      << output;
+  EXPECT_NE(output.find("excludes"), std::string::npos) << output;
+}
+
 TEST(RectangleCli, RefusesMixedOrMissingForms) {
   std::string output;
   EXPECT_EQ(run_command(authalic_binary() + " rectangle /tmp/x.surf.gii", &output), 2) << output;

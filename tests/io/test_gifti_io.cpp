@@ -2,6 +2,8 @@
 // and nibabel reading what we write (and us reading what nibabel writes).
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "io/io_test_util.h"
 #include "io/surface_io.h"
 
@@ -68,6 +70,31 @@ TEST(Gifti, FuncColumnsAndLabels) {
   labels << 0, 3, 3, 0, 7, 0;
   write_label_gifti(dir + "/r.label.gii", labels, {{0, "unknown"}, {3, "cortex"}, {7, "insula"}});
   EXPECT_EQ(read_region_vertices(dir + "/r.label.gii", 6), (std::vector<int>{1, 2, 4}));
+}
+
+// Issue 15 item 16: a cortex region file is told apart by content. A face set saved under a name
+// with no ".surf" (FreeSurfer's flat_left.gii.gz) is a face set; labels and masks are vertices;
+// per-vertex data that is not a mask (sulc: values outside [0, 1]) is refused, not thresholded.
+TEST(Gifti, RegionFilesAreReadByContent) {
+  const std::string dir = temp_dir("gifti_region_file");
+  TriMesh m;
+  m.V = (MatrixXd(4, 3) << 0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0).finished();
+  m.F = (MatrixXi(2, 3) << 0, 1, 2, 1, 3, 2).finished();
+  write_surface(dir + "/faces.surf.gii", m);
+  std::filesystem::copy_file(dir + "/faces.surf.gii", dir + "/flat_left.gii");  // the name says nothing
+  for (const std::string name : {"/faces.surf.gii", "/flat_left.gii"}) {
+    const RegionFile r = read_region_file(dir + name, 4);
+    EXPECT_TRUE(r.is_face_set) << name;
+    EXPECT_EQ(r.face_set_vertices, 4) << name;
+    EXPECT_EQ(r.faces, m.F) << name;
+  }
+  write_per_vertex(dir + "/mask.shape.gii", (MatrixXd(4, 1) << 1, 0, 1, 1).finished());
+  const RegionFile mask = read_region_file(dir + "/mask.shape.gii", 4);
+  EXPECT_FALSE(mask.is_face_set);
+  EXPECT_EQ(mask.vertices, (std::vector<int>{0, 2, 3}));
+  write_per_vertex(dir + "/sulc.shape.gii", (MatrixXd(4, 1) << -1.2, 0.3, 0.8, 1.9).finished());
+  expect_input_error([&] { read_region_file(dir + "/sulc.shape.gii", 4); }, dir + "/sulc.shape.gii",
+                     "values from -1.200000 to 1.900000 are not a 0/1 mask");
 }
 
 TEST(Gifti, NibabelReadsOurFilesWithMetadata) {
