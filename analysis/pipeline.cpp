@@ -322,12 +322,12 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     log.end(summary);
   }
 
-  // 2b. The whole brain on the 1:2 rectangle: the two hemispheres side by side, each part's width
+  // 2b. The whole brain on the 2:1 rectangle: the two hemispheres side by side, each part's width
   // proportional to its cortical area (core/rectangle_map.h, form b).
   HemisphereRectangles rect;
   MapMetrics rect_metrics;
   if (options.rectangle) {
-    log.begin("authalic 1:2 rectangle (both hemispheres)");
+    log.begin("authalic 2:1 rectangle (both hemispheres)");
     // The two square maps stretched to their shares (core/rectangle_map.h): no map is recomputed.
     rect = hemisphere_rectangles_from_squares(hemis[0].map, hemis[1].map);
     const Eigen::Index nl = rect.left.V.rows();
@@ -340,7 +340,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     log.note("left part width " + std::to_string(rect.split) + " of 2; flips " + std::to_string(rect_metrics.flips) +
              ", element-area CV " + std::to_string(rect_metrics.element_cv) + " (" + std::to_string(2 * options.k) + "x" +
              std::to_string(options.k) + ")");
-    require_authalic("the 1:2 rectangle of both hemispheres", rect_metrics, options.k == 32 ? nullptr : &V, UV, F,
+    require_authalic("the 2:1 rectangle of both hemispheres", rect_metrics, options.k == 32 ? nullptr : &V, UV, F,
                      MapDomain::Rectangle);
     log.end(summary);
   }
@@ -467,7 +467,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     sidecar(flat_name, {{"description", "authalic flat map; square side sqrt(cortical area) mm"},
                         {"metrics", {{"flips", h.metrics.flips}, {"element_area_cv", h.metrics.element_cv}}}});
     if (options.rectangle) {
-      // This hemisphere's part of the whole-brain 1:2 rectangle, in mm (the rectangle's area equals
+      // This hemisphere's part of the whole-brain 2:1 rectangle, in mm (the rectangle's area equals
       // both hemispheres' cortical area).
       const RectanglePart& part = h.left ? rect.left : rect.right;
       const double total = face_areas(rect.left.V, rect.left.F).sum() + face_areas(rect.right.V, rect.right.F).sum();
@@ -476,10 +476,10 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       rflat.V.leftCols(2) = part.UV * std::sqrt(total / 2.0);
       rflat.F = part.F;
       io::SurfaceWriteOptions ro = wo;
-      ro.metadata["space"] = "authalic whole-brain 1:2 rectangle scaled to the cortical area of both hemispheres (mm)";
+      ro.metadata["space"] = "authalic whole-brain 2:1 rectangle scaled to the cortical area of both hemispheres (mm)";
       const std::string rect_name = hp + "_space-authalicrect_flat.surf.gii";
       io::write_surface((stage / rect_name).string(), rflat, ro);
-      sidecar(rect_name, {{"description", "this hemisphere's part of the whole-brain 1:2 rectangle (left part x in [0, w_L], "
+      sidecar(rect_name, {{"description", "this hemisphere's part of the whole-brain 2:1 rectangle (left part x in [0, w_L], "
                                           "right part [w_L, 2] before scaling by sqrt(total cortical area / 2) mm)"},
                           {"metrics", {{"flips", rect_metrics.flips}, {"element_area_cv", rect_metrics.element_cv},
                                        {"element_grid", {2 * options.k, options.k}}, {"left_part_width", rect.split}}}});

@@ -1,7 +1,7 @@
 #pragma once
 // The clinician's per-subject pipeline (`authalic run`, issue 7). It composes the other steps and
 // adds no math of its own: load and check inputs -> authalic square map per hemisphere (and the
-// 1:2 whole-brain rectangle) -> PET sampling -> equal-area elements -> comparison with a normative
+// 2:1 whole-brain rectangle) -> PET sampling -> equal-area elements -> comparison with a normative
 // reference when given -> report.
 //
 // Output safety: everything is written into a staging folder `OUT/.sub-<id>.partial-<pid>` that
@@ -39,7 +39,7 @@ struct RunOptions {
   double z_threshold = 2.0;     // |z| flagged as abnormal
   bool rescale = true;          // CompareOptions::rescale
   bool report = true;           // write report.html
-  bool rectangle = true;        // also the 1:2 whole-brain rectangle map
+  bool rectangle = true;        // also the 2:1 whole-brain rectangle map
   bool require_age = false;     // refuse a reference with an age model when the age is unknown
   int pet_frame = -1;           // 4D PET: the frame to sample (0-based); -1: none chosen
   bool pet_sum_frames = false;  // 4D PET: sum all frames

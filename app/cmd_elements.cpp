@@ -175,7 +175,7 @@ const bool registered = register_command({45, [](CLI::App& parent) {
   CLI::App* sub = parent.add_subcommand(
       "elements",
       "Equal-area cortical elements: the cells of a regular grid on an authalic map (K x K on the square, 2K x K on the "
-      "1:2 rectangle, 2K x K equal-area cells on the sphere), each with the area-weighted mean value of the cortex that "
+      "2:1 rectangle, 2K x K equal-area cells on the sphere), each with the area-weighted mean value of the cortex that "
       "maps into it (triangles clipped to the cells), its cortical area (mm^2) and centroid (scanner RAS mm). Writes "
       "OUT_PREFIX.csv (+ .json sidecar), OUT_PREFIX.nii.gz (element values; _area.nii.gz: areas in mm^2), "
       "OUT_PREFIX.png (colour bar, units), OUT_PREFIX_3d.png (lateral/medial with the grid) and OUT_PREFIX.label.gii "

@@ -122,7 +122,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
                 "over its normal elements (see `authalic normative compare --help`)");
   sub->add_flag("--no-report", [a](std::int64_t) { a->options.report = false; }, "Skip report.html");
   sub->add_flag("--no-rectangle", [a](std::int64_t) { a->options.rectangle = false; },
-                "Skip the whole-brain 1:2 rectangle map (sub-<id>_hemi-?_space-authalicrect_flat.surf.gii)");
+                "Skip the whole-brain 2:1 rectangle map (sub-<id>_hemi-?_space-authalicrect_flat.surf.gii)");
   add_common_options(*sub);
   sub->callback([a]() { set_exit_code(run(*a)); });
 }});

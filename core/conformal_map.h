@@ -1,6 +1,6 @@
 #pragma once
 // Initial (conformal) map of a disk-topology mesh onto a rectangle [0, W] x [0, 1] (W = 1: the
-// unit square of Zou et al. 2011, seed 000 section 4.1; W = 2: the whole-brain 1:2 rectangle of
+// unit square of Zou et al. 2011, seed 000 section 4.1; W = 2: the whole-brain 2:1 rectangle of
 // seed 003 section 3.4).
 //
 // 1. The boundary loop is laid isometrically on the rectangle's perimeter: each boundary edge gets

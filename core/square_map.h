@@ -30,7 +30,7 @@
 namespace authalic {
 
 struct SquareMapOptions {
-  double width = 1.0;        // 1: the unit square; 2: the whole-brain 1:2 rectangle; any W > 0
+  double width = 1.0;        // 1: the unit square; 2: the whole-brain 2:1 rectangle; any W > 0
   FlowOptions flow;          // flow.width is set from `width`
   VectorXd density;          // optional per-vertex density (#V of the input, > 0), DLF 5.5
   bool anatomical_anchor = true;  // rule 2 above; false: the boundary starts at its first vertex at (0, 0)
