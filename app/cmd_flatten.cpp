@@ -238,9 +238,17 @@ void run(const FlattenArgs& a) {
     std::vector<int> verts;
     for (int v = 0; v < r.num_input_vertices; ++v)
       if (used[v]) verts.push_back(v);
+    // The region's boundary vertices carry FreeSurfer's border flag (stored as -(k+1)).
+    std::vector<char> boundary(r.num_input_vertices, 0);
+    for (const auto& loop : boundary_loops(region, r.num_input_vertices))
+      for (int v : loop) boundary[v] = 1;
     MatrixXd P = MatrixXd::Zero(static_cast<Eigen::Index>(verts.size()), 3);
-    for (size_t k = 0; k < verts.size(); ++k) P.row(k).head<2>() = r.UV.row(verts[k]) * scale;
-    io::write_freesurfer_patch(a.fs_patch, verts, P);
+    std::vector<bool> on_border(verts.size());
+    for (size_t k = 0; k < verts.size(); ++k) {
+      P.row(k).head<2>() = r.UV.row(verts[k]) * scale;
+      on_border[k] = boundary[verts[k]] != 0;
+    }
+    io::write_freesurfer_patch(a.fs_patch, verts, P, on_border);
   }
 
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -344,12 +344,14 @@ Patch parse_freesurfer_patch(const std::string& bytes, const std::string& path) 
   return p;
 }
 
-std::string serialize_freesurfer_patch(const std::vector<int>& vertices, const MatrixXd& positions) {
+std::string serialize_freesurfer_patch(const std::vector<int>& vertices, const MatrixXd& positions,
+                                       const std::vector<bool>& on_border) {
   BigEndianWriter out;
   out.i32(-1);
   out.i32(static_cast<std::int32_t>(vertices.size()));
   for (std::size_t i = 0; i < vertices.size(); ++i) {
-    out.i32(vertices[i] + 1);
+    const bool border = i < on_border.size() && on_border[i];
+    out.i32(border ? -(vertices[i] + 1) : vertices[i] + 1);
     for (int c = 0; c < 3; ++c)
       out.f32(static_cast<float>(c < positions.cols() ? positions(static_cast<Eigen::Index>(i), c) : 0.0));
   }

@@ -31,7 +31,8 @@ std::string serialize_freesurfer_label(const Label& label);
 bool looks_like_freesurfer_label(const std::string& bytes);
 
 Patch parse_freesurfer_patch(const std::string& bytes, const std::string& path);
-std::string serialize_freesurfer_patch(const std::vector<int>& vertices, const MatrixXd& positions);
+std::string serialize_freesurfer_patch(const std::vector<int>& vertices, const MatrixXd& positions,
+                                       const std::vector<bool>& on_border = {});
 
 // ---- GIFTI (io/gifti_io.cpp; gifticlib) -----------------------------------------------------
 // Reads .gii or gzipped .gii.gz. Arrays are found by intent, never by position.

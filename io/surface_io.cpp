@@ -208,14 +208,18 @@ void write_surface(const std::string& path, const TriMesh& mesh, const SurfaceWr
 
 Patch read_freesurfer_patch(const std::string& path) { return detail::parse_freesurfer_patch(detail::read_file(path), path); }
 
-void write_freesurfer_patch(const std::string& path, const std::vector<int>& vertices, const MatrixXd& positions) {
+void write_freesurfer_patch(const std::string& path, const std::vector<int>& vertices, const MatrixXd& positions,
+                            const std::vector<bool>& on_border) {
   if (positions.rows() != static_cast<Eigen::Index>(vertices.size()) || positions.cols() < 2)
     throw InputError(path + ": patch has " + std::to_string(vertices.size()) + " vertices but positions are " +
                      std::to_string(positions.rows()) + "x" + std::to_string(positions.cols()) + "; nothing written");
   for (const int v : vertices)
     if (v < 0) throw InputError(path + ": negative vertex index " + std::to_string(v) + " in patch; nothing written");
   if (!positions.allFinite()) throw InputError(path + ": non-finite patch coordinates; nothing written");
-  write_file_atomically(path, detail::serialize_freesurfer_patch(vertices, positions));
+  if (!on_border.empty() && on_border.size() != vertices.size())
+    throw InputError(path + ": " + std::to_string(on_border.size()) + " border flags for " + std::to_string(vertices.size()) +
+                     " patch vertices; nothing written");
+  write_file_atomically(path, detail::serialize_freesurfer_patch(vertices, positions, on_border));
 }
 
 TriMesh patch_mesh(const TriMesh& parent, const Patch& patch) {

@@ -64,8 +64,10 @@ struct Patch {
   std::vector<bool> on_border; // FreeSurfer's border flag (negative index in the file)
 };
 Patch read_freesurfer_patch(const std::string& path);
-// Writes a FreeSurfer patch (new format, -1 magic) for the given vertices and positions.
-void write_freesurfer_patch(const std::string& path, const std::vector<int>& vertices, const MatrixXd& positions);
+// Writes a FreeSurfer patch (new format, -1 magic) for the given vertices and positions; a vertex
+// flagged in on_border (empty: none) is stored as FreeSurfer stores border vertices, -(k+1).
+void write_freesurfer_patch(const std::string& path, const std::vector<int>& vertices, const MatrixXd& positions,
+                            const std::vector<bool>& on_border = {});
 
 // The faces of `parent` whose three vertices are all in the patch, with the patch's x,y,z for the
 // kept vertices (other vertices keep the parent's positions and are unused by the faces).

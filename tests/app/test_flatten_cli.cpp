@@ -78,6 +78,18 @@ TEST(FlattenCli, B1MeetsTheRequirementsAndKeepsTheInputsVertices) {
   EXPECT_GT(authalic::io::read_png(dir + "/hist.png").width, 200);
   const authalic::io::Patch p = authalic::io::read_freesurfer_patch(dir + "/lh.flat.patch");
   EXPECT_EQ(p.vertices.size(), 9465u);  // the region's input vertices
+  // FreeSurfer's border flag (stored as -(k+1)) on exactly the region's boundary vertices.
+  const auto region = authalic::io::read_surface(flat);
+  std::vector<char> boundary(static_cast<std::size_t>(region.mesh.num_vertices()), 0);
+  for (const auto& loop : authalic::boundary_loops(region.mesh.F, region.mesh.num_vertices()))
+    for (int v : loop) boundary[static_cast<std::size_t>(v)] = 1;
+  std::size_t flagged = 0, mismatched = 0;
+  for (std::size_t k = 0; k < p.vertices.size(); ++k) {
+    flagged += p.on_border[k];
+    mismatched += p.on_border[k] != (boundary[static_cast<std::size_t>(p.vertices[k])] != 0);
+  }
+  EXPECT_GT(flagged, 100u);
+  EXPECT_EQ(mismatched, 0u);
 }
 
 TEST(MetricsCli, AgreesWithTheIndependentEvalmap) {

@@ -188,6 +188,14 @@ TEST(FreeSurferPatch, RoundTripAndPatchMesh) {
   EXPECT_EQ(flat.num_faces(), 4);
   EXPECT_EQ(flat.num_vertices(), 6);
   EXPECT_TRUE(flat.V.row(2).isApprox(Eigen::RowVector3d(0, 1, 0)));
+  EXPECT_EQ(p.on_border, std::vector<bool>(5, false));
+  // Border vertices are stored as -(k+1) and read back flagged.
+  write_freesurfer_patch(dir + "/b.patch.flat", kept, xy, {true, true, true, true, false});
+  const std::string bytes = detail::read_file(dir + "/b.patch.flat");
+  ASSERT_GE(bytes.size(), 12u);
+  EXPECT_EQ(static_cast<unsigned char>(bytes[8]), 0xFF) << "vertex 0 on the border is stored as -1";
+  EXPECT_EQ(read_freesurfer_patch(dir + "/b.patch.flat").on_border, (std::vector<bool>{true, true, true, true, false}));
+  EXPECT_EQ(read_freesurfer_patch(dir + "/b.patch.flat").vertices, kept);
   // A patch is not a surface: read_surface says what to do instead.
   expect_input_error([&] { read_surface(dir + "/lh.cortex.patch.flat"); }, dir + "/lh.cortex.patch.flat", "patch");
 }
