@@ -27,24 +27,28 @@ void setup(CLI::App& parent) {
   sub->add_option("OUT", a->out, "Output surface (format by extension)")->required();
   sub->add_option("--times", a->times, "Number of subdivisions")->check(in_range(1, 6))->capture_default_str();
   sub->add_option("--faces-from", a->faces_from,
-                  "Subdivide this surface's triangles instead (same vertices as IN, e.g. a cortex patch's face set)");
+                  "Subdivide this face set's triangles (same vertices as IN, e.g. a cortex patch such as flat_left.gii.gz): OUT has "
+                  "the vertices of `subdivide IN`, so the two pair for `flatten --faces-from`");
   add_common_options(*sub);
   sub->callback([a]() {
     io::check_file_roles({a->in, a->faces_from}, {a->out});
-    io::Surface s = io::read_surface(a->in);
+    const io::Surface s = io::read_surface(a->in);
+    if (s.mesh.num_faces() == 0) throw InputError(a->in + ": has no triangles to subdivide");
+    TriMesh fine = subdivide_midpoint(s.mesh, a->times);
     if (!a->faces_from.empty()) {
+      // The face set subdivided on the whole surface's fine vertex list, so that OUT pairs with
+      // `subdivide IN` as flatten --faces-from expects.
       const io::Surface other = io::read_surface(a->faces_from);
       if (other.mesh.num_vertices() != s.mesh.num_vertices())
         throw InputError(a->faces_from + ": has " + std::to_string(other.mesh.num_vertices()) + " vertices but " + a->in +
                          " has " + std::to_string(s.mesh.num_vertices()) + "; --faces-from needs the same vertices");
-      s.mesh.F = other.mesh.F;
+      try {
+        fine.F = subdivide_midpoint_region(s.mesh, other.mesh.F, a->times);
+      } catch (const InputError& e) {
+        throw InputError(a->faces_from + " on " + a->in + ": " + e.what());
+      }
     }
-    if (s.mesh.num_faces() == 0) throw InputError(a->in + ": has no triangles to subdivide");
-    const TriMesh fine = subdivide_midpoint(s.mesh, a->times);
-    io::SurfaceWriteOptions wo;
-    wo.volume_geometry = s.volume_geometry;
-    wo.metadata = s.metadata;
-    io::write_surface(a->out, fine, wo);
+    io::write_surface(a->out, fine, io::same_space_write_options(s, a->in));
     info("subdivide: " + a->out + ": " + std::to_string(fine.num_vertices()) + " vertices, " +
          std::to_string(fine.num_faces()) + " faces");
   });

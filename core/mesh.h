@@ -151,4 +151,11 @@ Submesh submesh_from_vertices(const TriMesh& parent, const std::vector<bool>& ve
 // so the first #V vertices of the result are the input's.
 TriMesh subdivide_midpoint(const TriMesh& mesh, int times = 1);
 
+// The triangles of `region` (a face set on mesh's vertices whose edges are edges of mesh, e.g. a
+// cortex patch) subdivided on the vertex list of subdivide_midpoint(mesh, times): returns #F x 3
+// faces on those vertices, each region triangle's four children in its own orientation, so
+// (subdivide_midpoint(mesh), this) pair as a surface and a face set on it. Throws InputError
+// when a region triangle uses an edge mesh does not have.
+MatrixXi subdivide_midpoint_region(const TriMesh& mesh, const MatrixXi& region, int times = 1);
+
 }  // namespace authalic

@@ -1,4 +1,8 @@
 // Submesh extraction with index maps, and midpoint subdivision.
+#include <string>
+#include <unordered_map>
+
+#include "core/error.h"
 #include "core/mesh.h"
 
 namespace authalic {
@@ -64,6 +68,39 @@ TriMesh subdivide_midpoint(const TriMesh& mesh, int times) {
     cur = std::move(next);
   }
   return cur;
+}
+
+MatrixXi subdivide_midpoint_region(const TriMesh& mesh, const MatrixXi& region, int times) {
+  MatrixXi full = mesh.F, part = region;
+  int nv = mesh.num_vertices();
+  for (int it = 0; it < times; ++it) {
+    const EdgeTopology t = edge_topology(full, nv);
+    // The full mesh's edge numbering decides the midpoints' indices (as in subdivide_midpoint).
+    std::unordered_map<long long, int> edge_of;
+    edge_of.reserve(static_cast<std::size_t>(t.E.rows()) * 2);
+    auto key = [nv](int a, int b) { return static_cast<long long>(std::min(a, b)) * nv + std::max(a, b); };
+    for (Eigen::Index e = 0; e < t.E.rows(); ++e) edge_of.emplace(key(t.E(e, 0), t.E(e, 1)), static_cast<int>(e));
+    auto mid = [&](Eigen::Index f, int a, int b) {
+      const auto found = edge_of.find(key(a, b));
+      if (found == edge_of.end())
+        throw InputError("face set: triangle " + std::to_string(f) + " uses the edge (" + std::to_string(a) + ", " +
+                         std::to_string(b) + ") that the surface does not have; give a face set of the surface's own triangles");
+      return nv + found->second;
+    };
+    MatrixXi next(part.rows() * 4, 3);
+    for (Eigen::Index f = 0; f < part.rows(); ++f) {
+      const int a = part(f, 0), b = part(f, 1), c = part(f, 2);
+      const int ab = mid(f, a, b), bc = mid(f, b, c), ca = mid(f, c, a);
+      next.row(4 * f + 0) << a, ab, ca;
+      next.row(4 * f + 1) << b, bc, ab;
+      next.row(4 * f + 2) << c, ca, bc;
+      next.row(4 * f + 3) << ab, bc, ca;
+    }
+    part = std::move(next);
+    if (it + 1 < times) full = subdivide_midpoint(TriMesh{MatrixXd::Zero(nv, 3), full}, 1).F;
+    nv += static_cast<int>(t.E.rows());
+  }
+  return part;
 }
 
 }  // namespace authalic

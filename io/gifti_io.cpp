@@ -465,14 +465,22 @@ void write_gifti_surface(const std::string& path, const TriMesh& mesh, const Sur
     GiftiPtr gim(gifti_create_image(0, NIFTI_INTENT_NONE, NIFTI_TYPE_FLOAT32, 0, nullptr, 0));
     if (!gim) throw std::runtime_error("gifticlib could not create an image");
     add_meta(&gim->meta, "generator", "authalic");
-    for (const auto& [k, v] : options.metadata) add_meta(&gim->meta, k, v);
+    // The pointset's own keys go on the pointset array, where Workbench reads a surface's structure
+    // and type (a copy at file level shows "Structure: Invalid" in wb_command -file-information).
+    std::map<std::string, std::string> pointset_meta;
+    for (const auto& [k, v] : options.metadata)
+      if (k == "AnatomicalStructurePrimary" || k == "AnatomicalStructureSecondary" || k == "GeometricType")
+        pointset_meta[k] = v;
+      else
+        add_meta(&gim->meta, k, v);
+    if (!options.anatomical_structure.empty()) pointset_meta["AnatomicalStructurePrimary"] = options.anatomical_structure;
+    if (!options.geometric_type.empty()) pointset_meta["GeometricType"] = options.geometric_type;
 
     giiDataArray* p = add_array(path, gim.get(), kIntentPointset, NIFTI_TYPE_FLOAT32, mesh.num_vertices(), 3);
     auto* pv = static_cast<float*>(p->data);
     for (int i = 0; i < mesh.num_vertices(); ++i)
       for (int c = 0; c < 3; ++c) pv[3 * i + c] = static_cast<float>(mesh.V(i, c));
-    add_meta(&p->meta, "AnatomicalStructurePrimary", options.anatomical_structure);
-    add_meta(&p->meta, "GeometricType", options.geometric_type);
+    for (const auto& [k, v] : pointset_meta) add_meta(&p->meta, k, v);
     if (gifti_add_empty_CS(p) != 0) throw std::runtime_error("gifticlib could not add a coordinate system");
     giiCoordSystem* cs = p->coordsys[p->numCS - 1];
     const std::string space = options.space.empty() ? "NIFTI_XFORM_UNKNOWN" : options.space;

@@ -206,6 +206,26 @@ void write_surface(const std::string& path, const TriMesh& mesh, const SurfaceWr
   }
 }
 
+SurfaceWriteOptions same_space_write_options(const Surface& s, const std::string& what) {
+  SurfaceWriteOptions wo;
+  wo.metadata = s.metadata;
+  for (const char* key : {"Name", "Date", "UserName"}) wo.metadata.erase(key);  // of the input file, not the output
+  wo.volume_geometry = s.volume_geometry;
+  if (s.format == "gifti") {
+    if (s.space.rfind("NIFTI_XFORM_", 0) == 0) wo.space = s.space;
+    if (!s.to_scanner.isIdentity()) {
+      if (!s.to_scanner.block<3, 3>(0, 0).isIdentity(1e-9) || !s.to_scanner.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)))
+        throw InputError(what + ": its GIFTI transform to scanner space is not a translation; it cannot be carried to the output");
+      wo.volume_geometry = VolumeGeometry{};
+      wo.volume_geometry.valid = true;
+      wo.volume_geometry.volume = {256, 256, 256};
+      wo.volume_geometry.cras = s.to_scanner.block<3, 1>(0, 3);
+      wo.space = "NIFTI_XFORM_UNKNOWN";
+    }
+  }
+  return wo;
+}
+
 Patch read_freesurfer_patch(const std::string& path) { return detail::parse_freesurfer_patch(detail::read_file(path), path); }
 
 void write_freesurfer_patch(const std::string& path, const std::vector<int>& vertices, const MatrixXd& positions,

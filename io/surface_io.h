@@ -57,6 +57,13 @@ struct SurfaceWriteOptions {
 // anything else, e.g. lh.white). Atomic: a temporary file in the same folder, then rename.
 void write_surface(const std::string& path, const TriMesh& mesh, const SurfaceWriteOptions& options = {});
 
+// Write options for a surface on the same coordinates as `s` (e.g. its subdivision): its space
+// (GIFTI dataspace and scanner transform, or FreeSurfer's volume-geometry footer), its structure
+// and geometric type, and its other metadata. A GIFTI transform that is a translation (as
+// mris_convert writes c_ras) is kept as c_ras of a conformed 256^3 1 mm geometry; other
+// transforms cannot be expressed by the writer and are refused.
+SurfaceWriteOptions same_space_write_options(const Surface& s, const std::string& what);
+
 // FreeSurfer flat patch (lh.*.patch.flat / .3d): the vertices it keeps and their x,y,z.
 struct Patch {
   std::vector<int> vertices;   // original vertex indices

@@ -233,3 +233,46 @@ TEST(FlattenCli, NativeResolutionPialWithThe96PercentMaskMeetsTheElementBar) {
   EXPECT_LE(j.at("metrics").at("vertex_ln_area_abs").at("mean").get<double>(), 0.01);
   EXPECT_LE(j.at("metrics").at("face_ln_area_abs").at("mean").get<double>(), 0.05);
 }
+
+// Issue 15 item 3: `subdivide` keeps the GIFTI structure and type where Workbench reads them (on
+// the pointset), and `subdivide --faces-from` keeps the whole surface's fine vertex list, so the
+// two outputs pair for `flatten --faces-from`; the map is the one of the face set subdivided alone.
+TEST(SubdivideCli, KeepsTheStructureAndTheFaceSetPairsWithTheSurface) {
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(flat, "fsaverage5/flat_left.gii.gz");
+  const std::string dir = authalic::test::temp_dir("subdivide_pair");
+  const std::string w1 = dir + "/w1.surf.gii", f1 = dir + "/f1.surf.gii";
+  ASSERT_EQ(run_command(authalic_binary() + " subdivide " + white + " " + w1 + " -q"), 0);
+  ASSERT_EQ(run_command(authalic_binary() + " subdivide " + white + " " + f1 + " --faces-from " + flat + " -q"), 0);
+  const auto sw = authalic::io::read_surface(w1), sf = authalic::io::read_surface(f1);
+  EXPECT_EQ(sw.mesh.num_vertices(), 40962);
+  EXPECT_EQ(sf.mesh.num_vertices(), 40962);
+  EXPECT_TRUE(sf.mesh.V.isApprox(sw.mesh.V));
+  EXPECT_EQ(sf.mesh.num_faces(), 4 * authalic::io::read_surface(flat).mesh.num_faces());
+  EXPECT_EQ(sw.metadata.at("AnatomicalStructurePrimary"), "CortexLeft");
+  EXPECT_EQ(sw.metadata.at("GeometricType"), "Anatomical");
+  EXPECT_EQ(sw.metadata.count("Name"), 0u);  // the input file's name is not the output's
+  if (run_command("command -v wb_command > /dev/null 2>&1") == 0) {
+    std::string info;
+    ASSERT_EQ(run_command("wb_command -file-information " + w1, &info), 0) << info;
+    EXPECT_NE(info.find("CortexLeft"), std::string::npos) << info;
+    EXPECT_NE(info.find("Anatomical"), std::string::npos) << info;
+  } else if (authalic::test::running_in_ci()) {
+    FAIL() << "CI=true but wb_command (connectome-workbench) is missing";
+  }
+  std::string out;
+  ASSERT_EQ(run_command(authalic_binary() + " flatten " + w1 + " " + dir + "/a.surf.gii --faces-from " + f1 + " --uv " + dir +
+                            "/a.uv.surf.gii -q",
+                        &out),
+            0)
+      << out;
+  ASSERT_EQ(run_command(authalic_binary() + " flatten " + f1 + " " + dir + "/b.surf.gii --uv " + dir + "/b.uv.surf.gii -q", &out), 0) << out;
+  EXPECT_TRUE(authalic::io::read_surface(dir + "/a.uv.surf.gii").mesh.V.isApprox(authalic::io::read_surface(dir + "/b.uv.surf.gii").mesh.V));
+  // A face set with a triangle the surface does not have is refused with both names.
+  authalic::TriMesh wrong = authalic::io::read_surface(flat).mesh;
+  wrong.F.row(0) << 0, 5000, 9000;
+  authalic::io::write_surface(dir + "/wrong.surf.gii", wrong);
+  EXPECT_EQ(run_command(authalic_binary() + " subdivide " + white + " " + dir + "/x.surf.gii --faces-from " + dir + "/wrong.surf.gii", &out), 2);
+  EXPECT_NE(out.find("wrong.surf.gii on " + white + ": face set: triangle 0 uses the edge"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/x.surf.gii"));
+}

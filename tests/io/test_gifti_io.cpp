@@ -97,6 +97,30 @@ TEST(Gifti, RegionFilesAreReadByContent) {
                      "values from -1.200000 to 1.900000 are not a 0/1 mask");
 }
 
+// same_space_write_options carries a GIFTI surface's scanner translation (as mris_convert writes
+// c_ras), its dataspace and its pointset keys to an output on the same coordinates.
+TEST(Gifti, SameSpaceWriteOptionsKeepTheTransformAndTheStructure) {
+  const std::string dir = temp_dir("gifti_same_space");
+  TriMesh m;
+  m.V = (MatrixXd(3, 3) << 0, 0, 0, 1, 0, 0, 0, 1, 0).finished();
+  m.F = (MatrixXi(1, 3) << 0, 1, 2).finished();
+  SurfaceWriteOptions wo;
+  wo.anatomical_structure = "CortexRight";
+  wo.geometric_type = "Anatomical";
+  wo.metadata["AnatomicalStructureSecondary"] = "Pial";
+  wo.volume_geometry.valid = true;
+  wo.volume_geometry.cras = Eigen::Vector3d(1.5, -2, 30);
+  write_surface(dir + "/a.surf.gii", m, wo);
+  const Surface a = read_surface(dir + "/a.surf.gii");
+  write_surface(dir + "/b.surf.gii", m, same_space_write_options(a, dir + "/a.surf.gii"));
+  const Surface b = read_surface(dir + "/b.surf.gii");
+  EXPECT_TRUE(b.to_scanner.isApprox(a.to_scanner));
+  EXPECT_NEAR(b.to_scanner(2, 3), 30.0, 1e-12);
+  EXPECT_EQ(b.metadata.at("AnatomicalStructurePrimary"), "CortexRight");
+  EXPECT_EQ(b.metadata.at("AnatomicalStructureSecondary"), "Pial");
+  EXPECT_EQ(b.metadata.at("GeometricType"), "Anatomical");
+}
+
 TEST(Gifti, NibabelReadsOurFilesWithMetadata) {
   AUTHALIC_REQUIRE_NIBABEL();
   const std::string dir = temp_dir("gifti_nibabel_reads");
