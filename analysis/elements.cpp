@@ -546,6 +546,33 @@ ElementOutputPaths element_output_paths(const std::string& prefix) {
 
 std::vector<std::string> ElementOutputPaths::all() const { return {csv, sidecar, nifti, area_nifti, png, png_3d, label}; }
 
+void write_element_nifti(const std::string& path, const std::vector<float>& data, const ElementGrid& grid, int blocks,
+                         double element_area_mm2, ElementImageKind kind, const std::string& description) {
+  io::Volume image;
+  image.dims = {grid.cols, grid.rows, blocks};
+  image.data = data;
+  const double side = element_area_mm2 > 0 && std::isfinite(element_area_mm2) ? std::sqrt(element_area_mm2) : 1.0;
+  image.vox2ras = Eigen::Vector4d(side, side, 1.0, 1.0).asDiagonal();
+  io::NiftiWriteOptions o;
+  char area[48];
+  std::snprintf(area, sizeof(area), "; map grid, element %.4g mm^2", element_area_mm2);
+  o.description = description + area;
+  o.map_grid = true;
+  if (kind == ElementImageKind::kZScore) {
+    o.intent_code = 5;  // NIFTI_INTENT_ZSCORE (nifti1.h; not included here beside gifti_io.h's copy)
+    o.intent_name = "z-score";
+  }
+  io::write_nifti(path, image, o);
+}
+
+double mean_element_area(const ElementTable& table) {
+  double sum = 0;
+  int n = 0;
+  for (const auto& b : table.blocks)
+    for (const auto& e : b.elements) sum += e.area_mm2, ++n;
+  return n > 0 ? sum / n : std::nan("");
+}
+
 ElementOutputPaths write_element_outputs(const std::string& prefix, const ElementTable& table, const ElementResult& result,
                                          const MatrixXd& V_scanner, const MatrixXi& F, bool left) {
   if (table.blocks.size() != 1) throw std::logic_error("write_element_outputs: expects a one-block table");
@@ -556,14 +583,14 @@ ElementOutputPaths write_element_outputs(const std::string& prefix, const Elemen
 
   write_element_table(p.csv, table);
 
-  io::Volume image;
-  image.dims = {g.cols, g.rows, 1};
-  image.vox2ras = Eigen::Matrix4d::Identity();
-  image.data.resize(static_cast<std::size_t>(g.num_elements()));
-  for (const auto& e : block.elements) image.data[static_cast<std::size_t>(e.id)] = static_cast<float>(e.value);
-  io::write_nifti(p.nifti, image, "authalic element values (" + units + "), " + to_string(g.domain) + " K=" + std::to_string(g.k));
-  for (const auto& e : block.elements) image.data[static_cast<std::size_t>(e.id)] = static_cast<float>(e.area_mm2);
-  io::write_nifti(p.area_nifti, image, "authalic element areas (mm^2), " + to_string(g.domain) + " K=" + std::to_string(g.k));
+  const double element_area = mean_element_area(table);
+  std::vector<float> image(static_cast<std::size_t>(g.num_elements()));
+  for (const auto& e : block.elements) image[static_cast<std::size_t>(e.id)] = static_cast<float>(e.value);
+  write_element_nifti(p.nifti, image, g, 1, element_area, ElementImageKind::kValues,
+                      "authalic element values (" + units + "), " + to_string(g.domain) + " K=" + std::to_string(g.k));
+  for (const auto& e : block.elements) image[static_cast<std::size_t>(e.id)] = static_cast<float>(e.area_mm2);
+  write_element_nifti(p.area_nifti, image, g, 1, element_area, ElementImageKind::kAreas,
+                      "authalic element areas (mm^2), " + to_string(g.domain) + " K=" + std::to_string(g.k));
 
   const std::vector<double> values = block_values(block);
   ScalarColouring c;

@@ -135,7 +135,7 @@ ElementOutputPaths element_output_paths(const std::string& prefix);
 // Writes, for a one-block table and its result on a surface (V_scanner: RAS mm, F: its faces):
 //   PREFIX.csv + PREFIX.json   the element table (write_element_table)
 //   PREFIX.nii.gz              cols x rows x 1 float image of element values (voxel (col, row));
-//                              the grid is the domain's, not a scanner space: identity affine
+//                              the grid is the domain's, not a scanner space (write_element_nifti)
 //   PREFIX_area.nii.gz         the same with element areas (mm^2)
 //   PREFIX.png                 the element image with a colour bar and units
 //   PREFIX_3d.png              lateral and medial views coloured by element value, grid drawn
@@ -143,6 +143,17 @@ ElementOutputPaths element_output_paths(const std::string& prefix);
 // All atomic. `left` picks the lateral side for the 3D views.
 ElementOutputPaths write_element_outputs(const std::string& prefix, const ElementTable& table, const ElementResult& result,
                                          const MatrixXd& V_scanner, const MatrixXi& F, bool left);
+
+// An element image (cols x rows x blocks float, voxel (col, row, block) holds element
+// row * cols + col of that block) as NIfTI. The grid lives on the map, not in a scanner: sform and
+// qform codes 0 (unknown), so no viewer lays it over anatomy; x and y voxel sizes are
+// sqrt(element area) mm (mm of cortex per element side), z 1. kZScore images carry
+// NIFTI_INTENT_ZSCORE. The description (header descrip) ends with the element area. Atomic.
+enum class ElementImageKind { kValues, kAreas, kZScore };
+void write_element_nifti(const std::string& path, const std::vector<float>& data, const ElementGrid& grid, int blocks,
+                         double element_area_mm2, ElementImageKind kind, const std::string& description);
+// Mean element area (mm^2) over a table's blocks: the cortical area per element.
+double mean_element_area(const ElementTable& table);
 
 // Element values of one block as a rows x cols image (row 0 at the bottom), e.g. for render.h.
 std::vector<double> block_values(const ElementBlock& block);

@@ -654,12 +654,10 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
   const int ne = g.num_elements();
   const int nb = static_cast<int>(ref.hemispheres.size());
 
-  io::Volume image;
-  image.dims = {g.cols, g.rows, nb};
-  image.vox2ras = Eigen::Matrix4d::Identity();
-  image.data.resize(cmp.z.size());
-  for (std::size_t i = 0; i < cmp.z.size(); ++i) image.data[i] = static_cast<float>(cmp.z[i]);
-  io::write_nifti(p.z_nifti, image, "authalic z = (patient - expected)/SD, " + to_string(g.domain) + " K=" + std::to_string(g.k));
+  std::vector<float> image(cmp.z.size());
+  for (std::size_t i = 0; i < cmp.z.size(); ++i) image[i] = static_cast<float>(cmp.z[i]);
+  write_element_nifti(p.z_nifti, image, g, nb, mean_element_area(patient), ElementImageKind::kZScore,
+                      "authalic z = (patient - expected)/SD, " + to_string(g.domain) + " K=" + std::to_string(g.k));
 
   ScalarColouring c;
   c.colormap = "coolwarm";

@@ -200,16 +200,26 @@ void require_authalic(const std::string& what, const MapMetrics& m, const Matrix
 
 // The element image of one block as a K x K NIfTI (voxel (col, row)); the affine is a plain
 // index grid: element images live in the map's domain, not in scanner space.
-io::Volume element_volume(const ElementBlock& block, const ElementGrid& grid, bool areas, const std::string& source) {
-  io::Volume v;
-  v.dims = {grid.cols, grid.rows, 1};
-  v.data.resize(static_cast<std::size_t>(grid.num_elements()));
-  for (const Element& e : block.elements)
-    v.data[static_cast<std::size_t>(e.row) * grid.cols + e.col] = static_cast<float>(areas ? e.area_mm2 : e.value);
-  v.vox2ras = Eigen::Matrix4d::Identity();
-  v.orientation_source = "element grid";
-  v.source_path = source;
-  return v;
+// The element images' space, for their sidecars (write_element_nifti's header convention).
+std::string element_space_note(double element_area_mm2) {
+  std::ostringstream s;
+  s << "the authalic map's element grid, not a scanner space (NIfTI sform/qform codes 0); voxel (i, j) = element column i, "
+       "row j from the bottom; voxel size sqrt(element area) mm, element area "
+    << element_area_mm2 << " mm^2 of cortex";
+  return s.str();
+}
+
+// One block's element values as a cols x rows image (voxel (col, row)) for write_element_nifti.
+std::vector<float> element_image(const ElementBlock& block, const ElementGrid& grid) {
+  std::vector<float> data(static_cast<std::size_t>(grid.num_elements()));
+  for (const Element& e : block.elements) data[static_cast<std::size_t>(e.row) * grid.cols + e.col] = static_cast<float>(e.value);
+  return data;
+}
+
+double block_mean_area(const ElementBlock& block) {
+  double sum = 0;
+  for (const Element& e : block.elements) sum += e.area_mm2;
+  return block.elements.empty() ? std::nan("") : sum / static_cast<double>(block.elements.size());
 }
 
 json input_checksums(const SubjectInputs& in) {
@@ -492,9 +502,10 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     io::write_per_vertex((stage / pet_name).string(), h.pet, fo);
     sidecar(pet_name, {{"description", "PET per vertex (normal projection), normalised"}, {"units", table.units}});
     const std::string img_name = hp + "_desc-pet_elements.nii.gz";
-    io::write_nifti((stage / img_name).string(), element_volume(h.elements.block, table.grid, false, in.pet),
-                    "authalic PET elements " + h.name);
-    sidecar(img_name, {{"description", "element PET values, K x K (i = column, j = row from the bottom)"}, {"units", table.units}});
+    write_element_nifti((stage / img_name).string(), element_image(h.elements.block, table.grid), table.grid, 1,
+                        block_mean_area(h.elements.block), ElementImageKind::kValues, "authalic PET elements " + h.name);
+    sidecar(img_name, {{"description", "element PET values, K x K (i = column, j = row from the bottom)"}, {"units", table.units},
+                       {"space", element_space_note(block_mean_area(h.elements.block))}});
     ScalarColouring c;
     const auto range = robust_range(h.pet);
     c.vmin = range.first;
@@ -515,9 +526,11 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       ElementBlock zb = hemis[b].elements.block;
       for (std::size_t i = 0; i < zb.elements.size(); ++i) zb.elements[i].value = z[i];
       const std::string zimg = hp + "_desc-z_elements.nii.gz";
-      io::write_nifti((stage / zimg).string(), element_volume(zb, table.grid, false, in.normative), "authalic z " + hemis[b].name);
+      write_element_nifti((stage / zimg).string(), element_image(zb, table.grid), table.grid, 1, block_mean_area(zb),
+                          ElementImageKind::kZScore, "authalic z " + hemis[b].name);
       sidecar(zimg, {{"description", "element z-scores, z = (factor x patient - reference mean) / (reference SD x sqrt(1 + 1/n)); "
                                      "factor: the patient's rescaling to the reference over its normal elements (1 = none)"},
+                     {"space", element_space_note(block_mean_area(zb))},
                      {"rescale_factor", cmp.scale},
                      {"rescale_elements", cmp.scale_elements}});
       ScalarColouring zc;

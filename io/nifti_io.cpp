@@ -239,7 +239,7 @@ Volume read_nifti(const std::string& path, const VolumeReadOptions& options) {
   return v;
 }
 
-void write_nifti1(const std::string& path, const Volume& volume, const std::string& description) {
+void write_nifti1(const std::string& path, const Volume& volume, const NiftiWriteOptions& options) {
   const std::string name = lower_filename(path);
   if (!(ends_with(name, ".nii") || ends_with(name, ".nii.gz")))
     throw InputError(path + ": NIfTI output needs a .nii or .nii.gz name; nothing written");
@@ -254,8 +254,10 @@ void write_nifti1(const std::string& path, const Volume& volume, const std::stri
     nifti_dmat44 m;
     for (int r = 0; r < 4; ++r)
       for (int c = 0; c < 4; ++c) m.m[r][c] = volume.vox2ras(r, c);
-    nim->sform_code = NIFTI_XFORM_ALIGNED_ANAT;
-    nim->qform_code = NIFTI_XFORM_ALIGNED_ANAT;
+    nim->sform_code = options.map_grid ? NIFTI_XFORM_UNKNOWN : NIFTI_XFORM_ALIGNED_ANAT;
+    nim->qform_code = options.map_grid ? NIFTI_XFORM_UNKNOWN : NIFTI_XFORM_ALIGNED_ANAT;
+    nim->intent_code = options.intent_code;
+    std::snprintf(nim->intent_name, sizeof(nim->intent_name), "%s", options.intent_name.substr(0, 15).c_str());
     nim->sto_xyz = m;
     nim->sto_ijk = nifti_dmat44_inverse(m);
     // The qform holds rotation + voxel sizes only; nifti-clib fits the nearest rotation (exact for
@@ -277,7 +279,7 @@ void write_nifti1(const std::string& path, const Volume& volume, const std::stri
     nim->xyz_units = NIFTI_UNITS_MM;
     nim->scl_slope = 1.0;
     nim->scl_inter = 0.0;
-    std::snprintf(nim->descrip, sizeof(nim->descrip), "%s", description.substr(0, 79).c_str());
+    std::snprintf(nim->descrip, sizeof(nim->descrip), "%s", options.description.substr(0, 79).c_str());
     nim->data = std::malloc(volume.data.size() * sizeof(float));
     if (!nim->data) throw std::runtime_error("out of memory");
     std::memcpy(nim->data, volume.data.data(), volume.data.size() * sizeof(float));

@@ -23,7 +23,7 @@ void check_affine(const std::string& path, const Eigen::Matrix4d& vox2ras, const
 
 Volume read_nifti(const std::string& path, const VolumeReadOptions& options);    // io/nifti_io.cpp
 // NIfTI-1 float32 (nifti-clib 3.0 cannot be made to write a valid single-file NIfTI-2: measured).
-void write_nifti1(const std::string& path, const Volume& volume, const std::string& description);
+void write_nifti1(const std::string& path, const Volume& volume, const NiftiWriteOptions& options);
 Volume read_mgh(const std::string& path, const VolumeReadOptions& options);      // io/mgh_io.cpp
 Volume parse_mgh(const std::string& bytes, const std::string& path, const VolumeReadOptions& options);
 Volume read_dicom_series(const std::string& directory, const VolumeReadOptions& options);  // io/volume_io.cpp

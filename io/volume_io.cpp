@@ -89,7 +89,13 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
 }
 
 void write_nifti(const std::string& path, const Volume& volume, const std::string& description) {
-  detail::write_nifti1(path, volume, description);
+  NiftiWriteOptions options;
+  options.description = description;
+  detail::write_nifti1(path, volume, options);
+}
+
+void write_nifti(const std::string& path, const Volume& volume, const NiftiWriteOptions& options) {
+  detail::write_nifti1(path, volume, options);
 }
 
 void write_dicom_series(const std::string& directory, const Volume& volume) {

@@ -65,4 +65,14 @@ void write_mgh(const std::string& path, const Volume& volume);
 // Writes NIfTI-1 float32 (.nii or .nii.gz) with sform = qform = vox2ras (code 2: aligned). Atomic.
 void write_nifti(const std::string& path, const Volume& volume, const std::string& description = {});
 
+struct NiftiWriteOptions {
+  std::string description;  // header descrip (the first 79 characters)
+  // A grid that lives on a map (element images), not in a scanner: sform and qform codes 0
+  // (unknown), so no viewer lays it over anatomy as if aligned; pixdim keeps the voxel sizes.
+  bool map_grid = false;
+  int intent_code = 0;      // NIFTI_INTENT_*, e.g. 5 = NIFTI_INTENT_ZSCORE
+  std::string intent_name;  // the first 15 characters
+};
+void write_nifti(const std::string& path, const Volume& volume, const NiftiWriteOptions& options);
+
 }  // namespace authalic::io
