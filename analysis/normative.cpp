@@ -30,7 +30,6 @@ std::string join(const std::vector<std::string>& v) {
   return s;
 }
 
-std::string software_string() { return std::string("authalic ") + kVersion + " (" + kGitRevision + ")"; }
 
 // The properties two things must share to be pooled or compared.
 struct Shape {
@@ -102,7 +101,7 @@ NormativeReference empty_reference_like(const ElementTable& table) {
   for (const auto& b : table.blocks) r.hemispheres.push_back(b.hemisphere);
   r.normalisation = table.normalisation;
   r.units = table.units;
-  r.software = software_string();
+  r.software = software_version();
   const std::size_t size = static_cast<std::size_t>(r.num_values());
   r.n.assign(size, 0.0);
   r.mean.assign(size, 0.0);
@@ -160,7 +159,7 @@ NormativeReference merge_references(const NormativeReference& a, const Normative
   check_shapes(shape_of(a), shape_of(b), b_name, a_name);
   for (const auto& s : b.subjects) check_new_subject(a, s.id, b_name);
   NormativeReference r = a;
-  r.software = software_string();
+  r.software = software_version();
   r.subjects.insert(r.subjects.end(), b.subjects.begin(), b.subjects.end());
   r.age_model = a.age_model && b.age_model;
   if (!r.age_model) {
@@ -240,7 +239,7 @@ std::string reference_to_json(const NormativeReference& r) {
   nlohmann::json j;
   j["format"] = "authalic-normative-reference";
   j["version"] = kNormativeFormatVersion;
-  j["software"] = r.software.empty() ? software_string() : r.software;
+  j["software"] = r.software.empty() ? software_version() : r.software;
   j["description"] =
       "Normative reference of equal-area cortical elements (authalic). Per element, over the control "
       "subjects with a finite value there: n, mean, m2 = sum of squared deviations from the mean (SD = "
@@ -576,7 +575,7 @@ std::string comparison_summary_json(const NormativeReference& ref, const std::st
   nlohmann::json j;
   j["format"] = "authalic-comparison";
   j["version"] = 1;
-  j["software"] = software_string();
+  j["software"] = software_version();
   j["z_definition"] = std::string(cmp.rescaled ? "z = (factor x patient - expected) / SD" : "z = (patient - expected) / SD") +
                       (cmp.predictive ? ", SD = predictive SD of a new control (reference SD x sqrt(1 + 1/n [+ (age - mean age)^2 / "
                                         "sum of squared age deviations]))"
@@ -690,7 +689,7 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
     fo.metadata = {{"description", "z = (patient - expected) / SD of the vertex's equal-area element"},
                    {"reference", reference_path},
                    {"normalisation", ref.normalisation},
-                   {"software", software_string()}};
+                   {"software", software_version()}};
     io::write_per_vertex(path, zv, fo);
   }
 

@@ -44,7 +44,6 @@ namespace authalic::analysis {
 
 namespace {
 
-std::string software() { return std::string("authalic ") + kVersion + " (" + kGitRevision + ")"; }
 
 // Per-step wall times for the log (never written into the data files: outputs stay identical).
 class StepLog {
@@ -222,13 +221,29 @@ double block_mean_area(const ElementBlock& block) {
   return block.elements.empty() ? std::nan("") : sum / static_cast<double>(block.elements.size());
 }
 
+// OUT/dataset_description.json: the output folder as a BIDS derivative dataset. The same bytes for
+// every subject (no dates, no per-subject command line: those are in each file's sidecar), so runs
+// into one folder, in parallel or one after another, agree.
+void write_dataset_description(const std::string& out_dir) {
+  const json d = {{"Name", "Authalic: equal-area cortical elements of PET"},
+                  {"BIDSVersion", "1.9.0"},
+                  {"DatasetType", "derivative"},
+                  {"GeneratedBy",
+                   {{{"Name", "authalic"},
+                     {"Version", std::string(kVersion) + " (" + kGitRevision + ")"},
+                     {"Description", "authalic square/rectangle maps, PET sampled along the inward normal, equal-area elements, "
+                                     "z-scores against a normative reference; each file's .json sidecar records the command "
+                                     "line, parameters and inputs (path as given, SHA-256)"}}}}};
+  io::write_file_atomically((fs::path(out_dir) / "dataset_description.json").string(), d.dump(2) + "\n");
+}
+
 json input_checksums(const SubjectInputs& in) {
   json j;
   for (const auto& [key, path] : std::vector<std::pair<std::string, std::string>>{
            {"lh_white", in.lh_white}, {"lh_pial", in.lh_pial}, {"rh_white", in.rh_white}, {"rh_pial", in.rh_pial},
            {"lh_cortex", in.lh_cortex}, {"rh_cortex", in.rh_cortex}, {"pet", in.pet}, {"t1", in.t1}, {"normative", in.normative}}) {
     if (path.empty()) continue;
-    j[key] = {{"path", fs::path(path).filename().string()},
+    j[key] = {{"path", path},  // as given (relative paths: to the folder the command ran in)
               {"sha256", fs::is_directory(path) ? std::string("(folder)") : io::sha256_file(path)}};
   }
   return j;
@@ -405,7 +420,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   table.units = norm.units.empty() ? pet.units : norm.units;
   table.subject_id = in.id;
   table.age = in.age > 0 ? in.age : std::numeric_limits<double>::quiet_NaN();
-  table.metadata["software"] = software();
+  table.metadata["software"] = software_version();
   table.metadata["sampling"] = hemis[0].sampling.method;
   for (Hemisphere& h : hemis) {
     const ElementMap m = prepare_element_map(h.white.mesh.V, h.cortex_faces, h.map.UV, h.map.F, h.pet, ElementDomain::Square,
@@ -454,7 +469,10 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   auto sidecar = [&](const std::string& file, const json& extra) {
     const std::string base = file.substr(0, file.find('.'));
     json& j = sidecars[base];
-    if (j.is_null()) j = {{"software", software()}, {"parameters", params}, {"inputs", checksums}};
+    if (j.is_null()) {
+      j = {{"software", software_version()}, {"parameters", params}, {"inputs", checksums}};
+      if (!options.command_line.empty()) j["command_line"] = options.command_line;
+    }
     j["files"].push_back(file);
     j.update(extra);
     summary.files.push_back(file);
@@ -547,7 +565,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   if (options.report) {
     ReportData rd;
     rd.subject_id = in.id;
-    rd.software = software();
+    rd.software = software_version();
     rd.pet_units = table.units;
     rd.subject_info = {{"PET", fs::path(in.pet).filename().string()}, {"age", in.age > 0 ? std::to_string(in.age) : "unknown"}};
     for (const std::string& w : summary.warnings) rd.notes.push_back("Warning: " + w + ".");
@@ -610,7 +628,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   }
   for (const auto& [base, j] : sidecars) io::write_file_atomically((stage / (base + ".json")).string(), j.dump(2) + "\n");
   log.end(summary);
-  io::write_file_atomically((stage / "log.txt").string(), software() + "\nsubject sub-" + in.id + "\n" + log.text());
+  io::write_file_atomically((stage / "log.txt").string(), software_version() + "\nsubject sub-" + in.id + "\n" + log.text());
   summary.files.push_back("log.txt");
 
   // Swap the finished folder into place.
@@ -622,6 +640,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   } else {
     fs::rename(stage, final_dir);
   }
+  write_dataset_description(options.out_dir);
   summary.subject_dir = final_dir.string();
   summary.flips_left = hemis[0].metrics.flips;
   summary.flips_right = hemis[1].metrics.flips;

@@ -43,6 +43,7 @@ struct RunOptions {
   bool require_age = false;     // refuse a reference with an age model when the age is unknown
   int pet_frame = -1;           // 4D PET: the frame to sample (0-based); -1: none chosen
   bool pet_sum_frames = false;  // 4D PET: sum all frames
+  std::string command_line;     // as invoked, recorded in every sidecar (provenance); may be empty
 };
 
 struct RunSummary {

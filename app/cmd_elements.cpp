@@ -124,7 +124,7 @@ int run_elements(const ElementsArgs& a) {
   table.units = !a.units.empty() ? a.units : from_meta("units", "");
   table.subject_id = a.subject;
   table.age = a.age;
-  table.metadata = {{"software", std::string("authalic ") + kVersion + " (" + kGitRevision + ")"},
+  table.metadata = {{"software", software_version()},
                     {"surface", a.surface},
                     {"map", a.map},
                     {"values", a.values},

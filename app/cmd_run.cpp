@@ -49,7 +49,9 @@ int run(RunArgs& a) {
   if (in.pet.empty()) throw InputError("--pet is missing; give the subject's PET (NIfTI, MGH/MGZ or a DICOM folder)");
   analysis::RunSummary s;
   try {
-    s = analysis::run_subject(in, a.options, terminal_progress());
+    analysis::RunOptions options = a.options;
+    options.command_line = global_options().command_line;
+    s = analysis::run_subject(in, options, terminal_progress());
   } catch (...) {
     // A run that failed while writing (e.g. disk full) leaves no half-written staging folder.
     std::error_code ec;

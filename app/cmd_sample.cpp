@@ -159,7 +159,7 @@ int run_sample(const SampleArgs& a) {
   const std::string hemisphere = analysis::hemisphere_of(surface.metadata, a.surface);
   if (hemisphere == "left") fo.anatomical_structure = "CortexLeft";
   if (hemisphere == "right") fo.anatomical_structure = "CortexRight";
-  fo.metadata = {{"software", std::string("authalic ") + kVersion + " (" + kGitRevision + ")"},
+  fo.metadata = {{"software", software_version()},
                  {"volume", a.volume},
                  {"surface", a.surface},
                  {"sampling", result.method},

@@ -23,6 +23,7 @@ struct GlobalOptions {
   bool quiet = false;   // no progress, no informational lines
   bool json = false;    // machine-readable summary on stdout
   int threads = 0;      // 0 = OpenMP default
+  std::string command_line;  // argv as given, shell-quoted (provenance in sidecars)
 };
 GlobalOptions& global_options();
 

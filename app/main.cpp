@@ -144,7 +144,7 @@ int main(int argc, char** argv) {
   CLI::App cli{"authalic: area-preserving (authalic) maps of the cerebral cortex and equal-area PET "
                "quantification.\nUnits: mm (coordinates), mm^2 (areas). Surfaces are read in their file's space; "
                "FreeSurfer surfaces are tkregister RAS and are moved to scanner RAS with their footer's c_ras."};
-  cli.set_version_flag("--version", std::string("authalic ") + kVersion + " (" + kGitRevision + ")");
+  cli.set_version_flag("--version", software_version());
   cli.require_subcommand(1);
   cli.fallthrough(false);
   // Usage errors as one line, like every other refusal.
@@ -165,6 +165,14 @@ int main(int argc, char** argv) {
     return "authalic: error: " + what + " (see --help)\n";
   });
 
+  for (int i = 0; i < argc; ++i) {
+    // Shell-quoted so that the line can be run again as it is.
+    const std::string arg = argv[i];
+    const bool plain = !arg.empty() && arg.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-./=:,+@%") == std::string::npos;
+    std::string quoted = "'";
+    for (char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    app::global_options().command_line += (i ? " " : "") + (plain ? arg : quoted + "'");
+  }
   auto commands = app::registry();
   std::sort(commands.begin(), commands.end(), [](const app::Command& a, const app::Command& b) { return a.order < b.order; });
   for (const auto& c : commands) c.setup(cli);

@@ -188,6 +188,9 @@ Volume read_nifti(const std::string& path, const VolumeReadOptions& options) {
   } else if (nim->qform_code > 0) {
     v.vox2ras = to_eigen(nim->qto_xyz);
     v.orientation_source = "qform";
+  } else if (options.allow_map_grid) {
+    v.vox2ras = Eigen::Vector4d(nim->dx > 0 ? nim->dx : 1.0, nim->dy > 0 ? nim->dy : 1.0, nim->dz > 0 ? nim->dz : 1.0, 1.0).asDiagonal();
+    v.orientation_source = "pixdim";
   } else {
     fail(path, "no usable orientation (sform_code and qform_code are both 0), so voxel positions in mm are unknown",
          "set the orientation (e.g. nibabel set_sform/set_qform, fslorient or the converter's options) and retry");

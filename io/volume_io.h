@@ -29,6 +29,10 @@ struct Volume {
 struct VolumeReadOptions {
   int frame = -1;          // for 4D files: which frame (0-based); -1 = none chosen
   bool sum_frames = false; // for 4D files: sum all frames (e.g. a static image from dynamic frames)
+  // NIfTI with no orientation (sform and qform codes 0, as authalic's element images are written:
+  // a grid on the map, not in a scanner): accepted with NIfTI's method 1 (diagonal pixdim affine,
+  // orientation_source "pixdim") instead of refused. Never for a PET, whose position matters.
+  bool allow_map_grid = false;
 };
 
 // Reads NIfTI (.nii, .nii.gz), MGH/MGZ (.mgh, .mgz) or a DICOM series (a directory; the series with

@@ -7,6 +7,7 @@
 
 #include "analysis/elements.h"
 #include "common/test_data.h"
+#include "core/error.h"
 #include "core/mesh.h"
 #include "io/surface_io.h"
 #include "io/volume_io.h"
@@ -62,10 +63,17 @@ TEST(ElementsCli, WritesTableImagesAndLabelsWithEqualAreasOnAnIsometricMap) {
     EXPECT_NEAR(e.value, (e.col + 0.5) / 8.0, 1e-6);        // linear value: its cell-centre value
     EXPECT_NEAR(e.centroid.x(), 40.0 * (e.col + 0.5) / 8, 1e-9);
   }
-  const io::Volume img = io::read_volume(dir + "/el.nii.gz");
+  // The element image is a grid on the map: no scanner orientation (refused as a PET would be),
+  // read as a map grid with voxel size sqrt(element area) = 5 mm.
+  EXPECT_THROW(io::read_volume(dir + "/el.nii.gz"), authalic::InputError);
+  io::VolumeReadOptions grid;
+  grid.allow_map_grid = true;
+  const io::Volume img = io::read_volume(dir + "/el.nii.gz", grid);
   EXPECT_EQ(img.dims[0], 8);
+  EXPECT_EQ(img.orientation_source, "pixdim");
+  EXPECT_NEAR(img.voxel_size().x(), 5.0, 1e-5);
   EXPECT_NEAR(img.at(3, 5, 0), 3.5 / 8.0, 1e-6);
-  const io::Volume area = io::read_volume(dir + "/el_area.nii.gz");
+  const io::Volume area = io::read_volume(dir + "/el_area.nii.gz", grid);
   EXPECT_NEAR(area.at(7, 0, 0), 25.0, 1e-4);
   const VectorXd labels = io::read_per_vertex(dir + "/el.label.gii", surface.num_vertices());
   EXPECT_EQ(labels(0), 1);                // vertex (0,0): element 0 -> key 1

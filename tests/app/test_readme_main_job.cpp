@@ -3,6 +3,8 @@
 // README cannot drift from what the program does.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -59,4 +61,22 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   EXPECT_NE(html.str().find("<html"), std::string::npos);
   EXPECT_NE(html.str().find("data:image/png;base64,"), std::string::npos) << "pictures are embedded";
   EXPECT_NE(html.str().find("id=\"clusters\""), std::string::npos) << "the sample run compares with the reference";
+
+  // Provenance (issue 15 items 5 and 9): the output folder is a BIDS derivative dataset, and each
+  // sidecar records the command line as run and the inputs by the path given, with checksums.
+  std::ifstream dd(root / out[1].str() / "dataset_description.json");
+  ASSERT_TRUE(dd.good());
+  const auto d = nlohmann::json::parse(dd);
+  EXPECT_EQ(d.at("DatasetType"), "derivative");
+  EXPECT_FALSE(d.at("BIDSVersion").get<std::string>().empty());
+  EXPECT_EQ(d.at("GeneratedBy").at(0).at("Name"), "authalic");
+  std::ifstream sc(root / out[1].str() / ("sub-" + id[1].str()) / ("sub-" + id[1].str() + "_hemi-L_desc-z_elements.json"));
+  ASSERT_TRUE(sc.good());
+  const auto j = nlohmann::json::parse(sc);
+  EXPECT_NE(j.at("command_line").get<std::string>().find("build/authalic run --id " + id[1].str()), std::string::npos) << j.dump(1);
+  std::smatch pet;
+  ASSERT_TRUE(std::regex_search(main_job, pet, std::regex("--pet\\s+(\\S+)")));
+  EXPECT_EQ(j.at("inputs").at("pet").at("path"), pet[1].str());
+  EXPECT_EQ(j.at("inputs").at("pet").at("sha256").get<std::string>().size(), 64u);
+  EXPECT_EQ(j.at("parameters").at("z_age_adjusted"), true);
 }
