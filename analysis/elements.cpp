@@ -614,6 +614,19 @@ ElementOutputPaths write_element_outputs(const std::string& prefix, const Elemen
   so.title = "Equal-area elements (" + units + ")";
   io::write_png(p.png_3d, render_surface_views(V_scanner, F, c, {View::Lateral, View::Medial}, so, &result.vertex_element));
 
+  write_element_labels(p.label, result, g);
+  return p;
+}
+
+VectorXd element_values_at_vertices(const VectorXi& vertex_element, const double* element_values, int num_elements) {
+  VectorXd out = VectorXd::Constant(vertex_element.size(), std::numeric_limits<double>::quiet_NaN());
+  for (Eigen::Index v = 0; v < vertex_element.size(); ++v)
+    if (vertex_element(v) >= 0 && vertex_element(v) < num_elements) out(v) = element_values[vertex_element(v)];
+  return out;
+}
+
+void write_element_labels(const std::string& path, const ElementResult& result, const ElementGrid& g) {
+  const ElementBlock& block = result.block;
   VectorXi keys = (result.vertex_element.array() + 1).matrix();
   std::map<int, std::string> names{{0, "none"}};
   for (const auto& e : block.elements)
@@ -627,8 +640,7 @@ ElementOutputPaths write_element_outputs(const std::string& prefix, const Elemen
                  {"k", std::to_string(g.k)},
                  {"rows", std::to_string(g.rows)},
                  {"cols", std::to_string(g.cols)}};
-  io::write_label_gifti(p.label, keys, names, fo);
-  return p;
+  io::write_label_gifti(path, keys, names, fo);
 }
 
 }  // namespace authalic::analysis

@@ -155,6 +155,14 @@ void write_element_nifti(const std::string& path, const std::vector<float>& data
 // Mean element area (mm^2) over a table's blocks: the cortical area per element.
 double mean_element_area(const ElementTable& table);
 
+// Per-vertex values from element values: vertex v gets element_values[vertex_element(v)] (NaN for
+// a vertex in no element or an element id beyond the values).
+VectorXd element_values_at_vertices(const VectorXi& vertex_element, const double* element_values, int num_elements);
+
+// Per-vertex element of a result as a GIFTI label file: key = element id + 1 (id = row * cols +
+// col), 0 = in no element; the label table names each element's row and column. Atomic.
+void write_element_labels(const std::string& path, const ElementResult& result, const ElementGrid& grid);
+
 // Element values of one block as a rows x cols image (row 0 at the bottom), e.g. for render.h.
 std::vector<double> block_values(const ElementBlock& block);
 std::vector<double> block_areas(const ElementBlock& block);

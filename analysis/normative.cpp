@@ -604,9 +604,17 @@ std::string comparison_summary_json(const NormativeReference& ref, const std::st
                  {"without_z", cmp.num_without_z},
                  {"hypo", cmp.num_hypo},
                  {"hyper", cmp.num_hyper}};
-  j["clusters"] = nlohmann::json::array();
-  for (const auto& c : cmp.clusters)
-    j["clusters"].push_back({{"id", c.id},
+  j["clusters"] = nlohmann::json::parse(clusters_json(cmp.clusters));
+  j["notes"] = cmp.notes;
+  j["outputs"] = {{"z_nifti", paths.z_nifti}, {"z_png", paths.z_png}, {"abnormal_csv", paths.abnormal_csv},
+                  {"summary_json", paths.summary_json}, {"z_func", paths.z_func}};
+  return j.dump(2) + "\n";
+}
+
+std::string clusters_json(const std::vector<ElementCluster>& clusters) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& c : clusters)
+    a.push_back({{"id", c.id},
                              {"hemisphere", c.hemisphere},
                              {"sign", c.sign < 0 ? "hypo" : "hyper"},
                              {"num_elements", c.elements.size()},
@@ -617,10 +625,7 @@ std::string comparison_summary_json(const NormativeReference& ref, const std::st
                              {"peak_row", c.peak_row},
                              {"peak_col", c.peak_col},
                              {"peak_ras_mm", {number_or_null(c.peak_ras.x()), number_or_null(c.peak_ras.y()), number_or_null(c.peak_ras.z())}}});
-  j["notes"] = cmp.notes;
-  j["outputs"] = {{"z_nifti", paths.z_nifti}, {"z_png", paths.z_png}, {"abnormal_csv", paths.abnormal_csv},
-                  {"summary_json", paths.summary_json}, {"z_func", paths.z_func}};
-  return j.dump(2) + "\n";
+  return a.dump();
 }
 
 ComparisonOutputPaths comparison_output_paths(const std::string& prefix, const std::vector<std::string>& hemispheres,
@@ -677,9 +682,7 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
   for (int b = 0; b < nb && b < static_cast<int>(vertex_elements.size()); ++b) {
     const VectorXi& ve = vertex_elements[static_cast<std::size_t>(b)];
     if (ve.size() == 0) continue;
-    VectorXd zv = VectorXd::Constant(ve.size(), kNaN);
-    for (Eigen::Index v = 0; v < ve.size(); ++v)
-      if (ve(v) >= 0 && ve(v) < ne) zv(v) = cmp.z[static_cast<std::size_t>(b) * static_cast<std::size_t>(ne) + static_cast<std::size_t>(ve(v))];
+    const VectorXd zv = element_values_at_vertices(ve, cmp.z.data() + static_cast<std::size_t>(b) * static_cast<std::size_t>(ne), ne);
     const std::string& hemi = ref.hemispheres[static_cast<std::size_t>(b)];
     const std::string& path = p.z_func[z_file++];
     io::FuncWriteOptions fo;

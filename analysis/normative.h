@@ -192,6 +192,9 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
                                                const std::string& reference_path, const ElementTable& patient,
                                                const std::string& patient_path, const Comparison& comparison,
                                                const std::vector<VectorXi>& vertex_elements);
+// The clusters as a JSON array (id, hemisphere, sign, num_elements, area_mm2, peak_z, mean_z,
+// peak element/row/col, peak_ras_mm): the summary's "clusters" and `run --json`'s.
+std::string clusters_json(const std::vector<ElementCluster>& clusters);
 // The summary JSON document written above (also printed by --json).
 std::string comparison_summary_json(const NormativeReference& reference, const std::string& reference_path,
                                     const ElementTable& patient, const std::string& patient_path,

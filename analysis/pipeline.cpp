@@ -199,6 +199,40 @@ void require_authalic(const std::string& what, const MapMetrics& m, const Matrix
 
 // The element image of one block as a K x K NIfTI (voxel (col, row)); the affine is a plain
 // index grid: element images live in the map's domain, not in scanner space.
+// The clusters of abnormal elements as TSV (BIDS tabular file): one row per cluster, in the
+// comparison's order (largest first); columns described by clusters_tsv_sidecar.
+std::string clusters_tsv(const std::vector<ElementCluster>& clusters) {
+  std::ostringstream s;
+  s << "cluster\themisphere\tdirection\telements\tarea_mm2\tpeak_z\tmean_z\tpeak_row\tpeak_col\tpeak_x_mm\tpeak_y_mm\tpeak_z_mm\n";
+  s << std::setprecision(6);
+  for (const ElementCluster& c : clusters)
+    s << c.id << '\t' << c.hemisphere << '\t' << (c.sign < 0 ? "hypo" : "hyper") << '\t' << c.elements.size() << '\t'
+      << c.area_mm2 << '\t' << c.peak_z << '\t' << c.mean_z << '\t' << c.peak_row << '\t' << c.peak_col << '\t' << c.peak_ras.x()
+      << '\t' << c.peak_ras.y() << '\t' << c.peak_ras.z() << '\n';
+  return s.str();
+}
+
+json clusters_tsv_sidecar(double threshold) {
+  auto col = [](const std::string& d, const std::string& units = "") {
+    json j = {{"Description", d}};
+    if (!units.empty()) j["Units"] = units;
+    return j;
+  };
+  return {{"description", "clusters of abnormal elements: edge-adjacent elements of one sign with |z| >= " + std::to_string(threshold)},
+          {"cluster", col("cluster number, largest first")},
+          {"hemisphere", col("left or right")},
+          {"direction", col("hypo (z <= -threshold) or hyper (z >= threshold)")},
+          {"elements", col("number of equal-area elements")},
+          {"area_mm2", col("cortical area of the elements", "mm^2")},
+          {"peak_z", col("most extreme z of the cluster")},
+          {"mean_z", col("mean z of its elements")},
+          {"peak_row", col("element row of the peak (from the bottom of the square)")},
+          {"peak_col", col("element column of the peak")},
+          {"peak_x_mm", col("centroid of the peak element, scanner RAS x", "mm")},
+          {"peak_y_mm", col("centroid of the peak element, scanner RAS y", "mm")},
+          {"peak_z_mm", col("centroid of the peak element, scanner RAS z", "mm")}};
+}
+
 // The element images' space, for their sidecars (write_element_nifti's header convention).
 std::string element_space_note(double element_area_mm2) {
   std::ostringstream s;
@@ -448,6 +482,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     for (const std::string& w : summary.warnings) log.note("warning: " + w);
     summary.abnormal_elements = cmp.num_hypo + cmp.num_hyper;
     summary.clusters = static_cast<int>(cmp.clusters.size());
+    summary.clusters_json = clusters_json(cmp.clusters);
     log.end(summary);
   }
 
@@ -533,6 +568,10 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     io::write_png((stage / png_name).string(),
                   render_element_grid(block_values(h.elements.block), K, K, c, 12, h.name + " PET elements"));
     sidecar(png_name, {{"description", "element PET values"}});
+    const std::string labels_name = hp + "_desc-elements.label.gii";
+    write_element_labels((stage / labels_name).string(), h.elements, table.grid);
+    sidecar(labels_name, {{"description", "each vertex's equal-area element: key = element id + 1 (id = row x K + column), 0 = "
+                                          "in no element; pairs with the white and pial surfaces (the input's vertices)"}});
   }
   const std::string table_name = prefix + "_elements.csv";
   write_element_table((stage / table_name).string(), table);
@@ -559,7 +598,18 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       const std::string zpng = hp + "_desc-z_elements.png";
       io::write_png((stage / zpng).string(), render_element_grid(z, K, K, zc, 12, hemis[b].name + " z-scores"));
       sidecar(zpng, {{"description", "element z-scores"}});
+      io::FuncWriteOptions zo;
+      zo.column_names = {"z"};
+      zo.anatomical_structure = hemis[b].left ? "CortexLeft" : "CortexRight";
+      zo.metadata = {{"description", "z of each vertex's equal-area element (NaN: in no element)"}, {"units", "z"}};
+      const std::string zfunc = hp + "_desc-z.func.gii";
+      io::write_per_vertex((stage / zfunc).string(), element_values_at_vertices(hemis[b].elements.vertex_element, z.data(),
+                                                                                 static_cast<int>(z.size())), zo);
+      sidecar(zfunc, {{"description", "per-vertex z: the z of the vertex's element; pairs with the white and pial surfaces"}});
     }
+    const std::string clusters_name = prefix + "_desc-clusters.tsv";
+    io::write_file_atomically((stage / clusters_name).string(), clusters_tsv(cmp.clusters));
+    sidecar(clusters_name, clusters_tsv_sidecar(options.z_threshold));
   }
 
   if (options.report) {

@@ -53,6 +53,7 @@ struct RunSummary {
   double element_cv_left = 0, element_cv_right = 0;
   int abnormal_elements = -1;   // -1 without a reference
   int clusters = -1;
+  std::string clusters_json;    // the clusters as a JSON array (analysis/normative.h clusters_json); "" without a reference
   std::vector<std::string> files;  // written, relative to subject_dir
   std::vector<std::string> warnings;  // also in log.txt and the report
 };

@@ -69,7 +69,8 @@ int run(RunArgs& a) {
                         {"files", s.files}};
     if (s.abnormal_elements >= 0) {
       j["abnormal_elements"] = s.abnormal_elements;
-      j["clusters"] = s.clusters;
+      j["num_clusters"] = s.clusters;
+      j["clusters"] = nlohmann::json::parse(s.clusters_json);
     }
     for (const auto& [step, sec] : s.step_seconds) j["step_seconds"][step] = sec;
     std::cout << j.dump(2) << '\n';

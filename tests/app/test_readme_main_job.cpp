@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "common/test_data.h"
+#include "io/surface_io.h"
 
 namespace fs = std::filesystem;
 
@@ -79,4 +80,24 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   EXPECT_EQ(j.at("inputs").at("pet").at("path"), pet[1].str());
   EXPECT_EQ(j.at("inputs").at("pet").at("sha256").get<std::string>().size(), 64u);
   EXPECT_EQ(j.at("parameters").at("z_age_adjusted"), true);
+
+  // Issue 15 item 6: beside the HTML, the clusters as TSV (with a sidecar describing its columns),
+  // and per hemisphere the per-vertex z and element label, on the input's vertices.
+  const fs::path subject = root / out[1].str() / ("sub-" + id[1].str());
+  const std::string stem = "sub-" + id[1].str();
+  std::ifstream tsv(subject / (stem + "_desc-clusters.tsv"));
+  std::string header, first;
+  ASSERT_TRUE(std::getline(tsv, header));
+  EXPECT_EQ(header, "cluster\themisphere\tdirection\telements\tarea_mm2\tpeak_z\tmean_z\tpeak_row\tpeak_col\tpeak_x_mm\tpeak_y_mm\tpeak_z_mm");
+  ASSERT_TRUE(std::getline(tsv, first)) << "the sample patient has clusters";
+  EXPECT_EQ(first.rfind("1\t", 0), 0u) << first;
+  std::ifstream tsv_sidecar(subject / (stem + "_desc-clusters.json"));
+  EXPECT_EQ(nlohmann::json::parse(tsv_sidecar).at("area_mm2").at("Units"), "mm^2");
+  std::smatch white;
+  ASSERT_TRUE(std::regex_search(main_job, white, std::regex("--lh-white\\s+(\\S+)")));
+  const int nv = authalic::io::read_surface((root / white[1].str()).string()).mesh.num_vertices();
+  const authalic::VectorXd z = authalic::io::read_per_vertex((subject / (stem + "_hemi-L_desc-z.func.gii")).string(), nv);
+  EXPECT_LT(z.array().isNaN().select(0.0, z.array()).minCoeff(), -2.0) << "the planted region is hypometabolic";
+  const authalic::VectorXd labels = authalic::io::read_per_vertex((subject / (stem + "_hemi-L_desc-elements.label.gii")).string(), nv);
+  EXPECT_GT(labels.maxCoeff(), 1000.0);  // element ids + 1 up to K^2 = 1024
 }
