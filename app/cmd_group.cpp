@@ -207,7 +207,8 @@ const bool registered = register_command({60, [](CLI::App& parent) {
       "group",
       "Run the per-subject pipeline for a cohort (controls first), build the normative reference from the "
       "controls, then compare the patients with it. COHORT.csv columns: subject_id,role(control|patient),age,"
-      "pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex (paths relative to the CSV). Writes "
+      "pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex (paths relative to the CSV; RFC 4180 CSV as spreadsheets "
+      "write it: quoted fields, CRLF, a UTF-8 byte-order mark). Writes "
       "OUT/controls/sub-<id>/, OUT/patients/sub-<id>/, OUT/normative.json and OUT/logs/<id>.log (each subject's progress and messages). "
       "A failed subject is reported and does not stop the others (exit 3 at the end).");
   sub->add_option("cohort", args->cohort, "Cohort list (CSV)")->required()->check(CLI::ExistingFile);

@@ -1,7 +1,11 @@
 #include "app/cohort.h"
 
+#include <csv.h>
+
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <stdexcept>
 #include <map>
 #include <set>
 #include <sstream>
@@ -14,32 +18,63 @@ namespace fs = std::filesystem;
 namespace authalic::app {
 
 namespace {
-std::vector<std::string> split_csv_line(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cell;
-  bool quoted = false;
-  for (char c : line) {
-    if (c == '"') {
-      quoted = !quoted;
-    } else if (c == ',' && !quoted) {
-      out.push_back(cell);
-      cell.clear();
-    } else if (c != '\r') {
-      cell += c;
+
+// The cohort file's records, parsed by libcsv (RFC 4180: quoted fields with commas, doubled
+// quotes and line breaks; CRLF or LF), after an optional UTF-8 byte-order mark (Excel writes one).
+// Each record keeps the line it starts on, for messages.
+struct CsvRecord {
+  int line = 0;
+  std::vector<std::string> cells;
+};
+
+std::vector<CsvRecord> read_csv_records(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open the cohort list; check the path");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);
+  struct State {
+    std::vector<CsvRecord> records;
+    CsvRecord current;
+    int line = 1;
+  } st;
+  csv_parser parser;
+  if (csv_init(&parser, CSV_STRICT | CSV_STRICT_FINI | CSV_APPEND_NULL) != 0) throw std::runtime_error("libcsv could not be initialised");
+  auto on_field = [](void* data, std::size_t n, void* out) {
+    auto* s = static_cast<State*>(out);
+    if (s->current.cells.empty()) s->current.line = s->line;
+    s->current.cells.emplace_back(static_cast<const char*>(data), n);
+  };
+  auto on_record = [](int, void* out) {
+    auto* s = static_cast<State*>(out);
+    s->records.push_back(std::move(s->current));
+    s->current = CsvRecord{};
+  };
+  // Fed line by line so that each record knows its line number.
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find('\n', start);
+    end = end == std::string::npos ? text.size() : end + 1;
+    if (csv_parse(&parser, text.data() + start, end - start, on_field, on_record, &st) != end - start) {
+      const std::string why = csv_strerror(csv_error(&parser));
+      csv_free(&parser);
+      throw InputError(path + ":" + std::to_string(st.line) + ": not valid CSV (" + why + "); check the quotes on this line");
     }
+    ++st.line;
+    start = end;
   }
-  out.push_back(cell);
-  return out;
+  const bool closed = csv_fini(&parser, on_field, on_record, &st) == 0;
+  csv_free(&parser);
+  if (!closed) throw InputError(path + ": not valid CSV (a quoted field is never closed); check the quotes");
+  return st.records;
 }
+
 }  // namespace
 
 std::vector<CohortSubject> read_cohort(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the cohort list; check the path");
+  const std::vector<CsvRecord> records = read_csv_records(path);
   const fs::path base = fs::absolute(fs::path(path)).parent_path();
-  std::string line;
-  if (!std::getline(in, line)) throw InputError(path + ": empty cohort list; expected a header line");
-  const auto header = split_csv_line(line);
+  if (records.empty()) throw InputError(path + ": empty cohort list; expected a header line");
+  const auto& header = records[0].cells;
   std::map<std::string, std::size_t> col;
   for (std::size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
   static const char* required[] = {"subject_id", "role", "pet", "lh_white", "lh_pial",
@@ -48,15 +83,16 @@ std::vector<CohortSubject> read_cohort(const std::string& path) {
     if (!col.count(r)) throw InputError(path + ": the header has no column '" + r + "'; see `authalic group --help`");
   std::vector<CohortSubject> subjects;
   std::set<std::string> seen;
-  int lineno = 1;
-  while (std::getline(in, line)) {
-    ++lineno;
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    const auto cells = split_csv_line(line);
+  for (std::size_t r = 1; r < records.size(); ++r) {
+    const auto& cells = records[r].cells;
+    bool blank = true;
+    for (const auto& c : cells) blank = blank && c.find_first_not_of(" \t") == std::string::npos;
+    if (blank) continue;
     auto get = [&](const std::string& name) -> std::string {
       const std::size_t i = col.at(name);
       return i < cells.size() ? cells[i] : std::string();
     };
+    const int lineno = records[r].line;
     const std::string where = path + ":" + std::to_string(lineno);
     CohortSubject s;
     s.id = get("subject_id");

@@ -7,7 +7,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libsuitesparse-dev libvtk9-dev libinsighttoolkit5-dev
   libnifti2-dev libgiftiio-dev zlib1g-dev libpng-dev libssl-dev libexpat1-dev
-  libcli11-dev nlohmann-json3-dev libgtest-dev
+  libcli11-dev nlohmann-json3-dev libgtest-dev libcsv-dev
   python3 python3-nibabel python3-numpy python3-scipy
   clang libclang-rt-14-dev libomp-dev      # libFuzzer targets (scripts/fuzz.sh), ThreadSanitizer
   connectome-workbench                     # wb_command: reference values for the sampling tests

@@ -515,6 +515,37 @@ TEST(ReliabilityCli, GroupValidatesIdsAndAgesBeforeAnyFile) {
   EXPECT_NE(out.find("age '7O' is not a number"), std::string::npos) << out;
 }
 
+// Issue 15 item 14: the cohort list is read as spreadsheets write CSV (libcsv): a UTF-8 byte-order
+// mark, CRLF line ends, a quoted path holding a comma and a doubled quote. The rows before a bad
+// one parse (their files are found), and messages name the right line.
+TEST(ReliabilityCli, CohortCsvIsReadAsSpreadsheetsWriteIt) {
+  const std::string dir = test::temp_dir("rel-group-csv");
+  const std::string pet = dir + "/pet, \"baseline\".nii.gz";
+  fs::copy_file(sample("sub-patient01/sub-patient01_pet.nii.gz"), pet);
+  const std::string files = "," + sample("surf/lh.white") + "," + sample("surf/lh.pial") + "," + sample("surf/rh.white") + "," +
+                            sample("surf/rh.pial") + "," + sample("label/lh.cortex.label") + "," + sample("label/rh.cortex.label");
+  const std::string quoted_pet = "\"pet, \"\"baseline\"\".nii.gz\"";
+  {
+    std::ofstream c(dir + "/cohort.csv", std::ios::binary);
+    c << "\xEF\xBB\xBFsubject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex\r\n"
+      << "c01,control,60," << quoted_pet << files << "\r\n"
+      << "c02,control,61," << quoted_pet << files << "\r\n"
+      << "c03,control,7O," << quoted_pet << files << "\r\n";
+  }
+  std::string out;
+  EXPECT_EQ(test::run_command(bin() + " group " + q(dir + "/cohort.csv") + " " + q(dir + "/g"), &out), 2) << out;
+  EXPECT_NE(out.find("cohort.csv:4: age '7O' is not a number"), std::string::npos) << out;
+  EXPECT_EQ(lines_of(out), 1) << out;
+  {
+    std::ofstream c(dir + "/broken.csv", std::ios::binary);
+    c << "subject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex\n"
+      << "c01,control,60,\"" << pet << files << "\n";
+  }
+  EXPECT_EQ(test::run_command(bin() + " group " + q(dir + "/broken.csv") + " " + q(dir + "/g2"), &out), 2) << out;
+  EXPECT_NE(out.find("broken.csv:2: not valid CSV"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/g2"));
+}
+
 // Running (a zombie, reparented to an init that does not reap, counts as ended).
 bool process_alive(pid_t pid) {
   std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
