@@ -18,6 +18,7 @@
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <thread>
 
 #include "app/cohort.h"
@@ -110,6 +111,28 @@ void run_jobs(std::vector<Job>& jobs, int parallel, const std::string& stage, co
   }
 }
 
+struct GroupArgs {
+  std::string cohort, out;
+  int jobs = 2;
+  int k = 32;
+  bool force = false;
+  // Passed to every subject's `run` (see `authalic run --help`).
+  std::string normalize = "global";
+  double threshold = 2.0;
+  bool rectangle = true, rescale = true;
+  std::string normative;  // an existing reference for the patients: none is built from the controls
+};
+
+// The options of `run` that `group` passes on, as arguments.
+std::vector<std::string> run_options(const GroupArgs& a) {
+  std::ostringstream t;
+  t << a.threshold;
+  std::vector<std::string> o = {"--normalize", a.normalize, "--threshold", t.str()};
+  if (!a.rectangle) o.push_back("--no-rectangle");
+  if (!a.rescale) o.push_back("--no-rescale");
+  return o;
+}
+
 std::vector<std::string> subject_args(const std::string& exe, const CohortSubject& s, int k, int threads,
                                       const std::string& out) {
   std::vector<std::string> args = {exe, "run", "--id", s.id, "--lh-white", s.lh_white, "--lh-pial", s.lh_pial, "--rh-white", s.rh_white,
@@ -119,15 +142,20 @@ std::vector<std::string> subject_args(const std::string& exe, const CohortSubjec
   return args;
 }
 
-struct GroupArgs {
-  std::string cohort, out;
-  int jobs = 2;
-  int k = 32;
-  bool force = false;
-};
+// An existing reference given with --normative: read and checked against --k and --normalize
+// before any map is computed (a mismatch would only show after every subject had run).
+void check_reference(const GroupArgs& a) {
+  if (a.normative.empty()) return;
+  const analysis::NormativeReference ref = analysis::read_reference(a.normative);
+  if (ref.grid.domain != analysis::ElementDomain::Square || ref.grid.k != a.k)
+    throw InputError(a.normative + ": the reference has " + to_string(ref.grid.domain) + " K = " + std::to_string(ref.grid.k) +
+                     " elements but the subjects would get square K = " + std::to_string(a.k) + "; give --k " +
+                     std::to_string(ref.grid.k) + " or a reference built with K = " + std::to_string(a.k));
+}
 
 int run_group(const GroupArgs& a) {
   const auto subjects = read_cohort(a.cohort);
+  check_reference(a);
   if (fs::exists(a.out) && !fs::is_empty(a.out) && !a.force)
     throw InputError(a.out + ": output folder exists and is not empty; choose another or pass --force");
   fs::create_directories(fs::path(a.out) / "logs");
@@ -144,6 +172,8 @@ int run_group(const GroupArgs& a) {
       Job j;
       j.id = s.id;
       j.argv = subject_args(exe, s, a.k, threads, (fs::path(a.out) / dir).string());
+      const std::vector<std::string> options = run_options(a);
+      j.argv.insert(j.argv.end(), options.begin(), options.end());
       j.argv.insert(j.argv.end(), extra.begin(), extra.end());
       j.log = (fs::path(a.out) / "logs" / (s.id + ".log")).string();
       jobs.push_back(std::move(j));
@@ -169,7 +199,9 @@ int run_group(const GroupArgs& a) {
   summary["cohort"] = a.cohort;
   summary["controls_used"] = used;
   int reference_exit = -1;
-  if (used >= analysis::kMinControls) {
+  if (!a.normative.empty()) {
+    reference_exit = 0;  // given: nothing to build
+  } else if (used >= analysis::kMinControls) {
     Job ref;
     ref.id = "reference";
     ref.argv = build;
@@ -183,7 +215,8 @@ int run_group(const GroupArgs& a) {
 
   // 3. Patients, compared with the reference when there is one.
   std::vector<std::string> extra;
-  if (reference_exit == 0) extra = {"--normative", (fs::path(a.out) / "normative.json").string()};
+  const std::string reference = a.normative.empty() ? (fs::path(a.out) / "normative.json").string() : a.normative;
+  if (reference_exit == 0) extra = {"--normative", reference};
   std::vector<Job> patients = make_jobs("patient", "patients", extra);
   run_jobs(patients, parallel, "patients", progress);
 
@@ -197,7 +230,8 @@ int run_group(const GroupArgs& a) {
   summary["failed"] = failed;
   if (global_options().json) std::cout << summary.dump(2) << '\n';
   info("authalic group: " + std::to_string(controls.size() + patients.size() - failed) + " subjects done, " +
-       std::to_string(failed) + " failed; reference " + (reference_exit == 0 ? "built" : "NOT built"));
+       std::to_string(failed) + " failed; reference " +
+       (!a.normative.empty() ? "given (" + a.normative + ")" : reference_exit == 0 ? "built" : "NOT built"));
   return (failed == 0 && reference_exit == 0) ? 0 : 3;
 }
 
@@ -206,7 +240,8 @@ const bool registered = register_command({60, [](CLI::App& parent) {
   CLI::App* sub = parent.add_subcommand(
       "group",
       "Run the per-subject pipeline for a cohort (controls first), build the normative reference from the "
-      "controls, then compare the patients with it. COHORT.csv columns: subject_id,role(control|patient),age,"
+      "controls (or take an existing one, --normative), then compare the patients with it; run's --normalize, "
+      "--threshold, --no-rectangle and --no-rescale apply to every subject. COHORT.csv columns: subject_id,role(control|patient),age,"
       "pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex (paths relative to the CSV; RFC 4180 CSV as spreadsheets "
       "write it: quoted fields, CRLF, a UTF-8 byte-order mark). Writes "
       "OUT/controls/sub-<id>/, OUT/patients/sub-<id>/, OUT/normative.json and OUT/logs/<id>.log (each subject's progress and messages). "
@@ -217,6 +252,19 @@ const bool registered = register_command({60, [](CLI::App& parent) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--k", args->k, "Element grid: K x K per hemisphere square")->check(in_range(2, 512));
   sub->add_flag("--force", args->force, "Write into an existing output folder");
+  sub->add_option("--normalize", args->normalize,
+                  "Intensity normalisation of every subject, as `run --normalize`: none, global (cortical mean), or a "
+                  "reference-region mask NIfTI (SUVR)")
+      ->capture_default_str();
+  sub->add_option("--threshold", args->threshold, "|z| at or beyond which a patient's element is abnormal")
+      ->check(in_range(0.5, 10))
+      ->capture_default_str();
+  sub->add_flag("--no-rectangle", [args](std::int64_t) { args->rectangle = false; }, "Skip the whole-brain 2:1 rectangle map of every subject");
+  sub->add_flag("--no-rescale", [args](std::int64_t) { args->rescale = false; }, "As `run --no-rescale`, for the patients");
+  sub->add_option("--normative", args->normative,
+                  "Compare the patients with this existing reference (authalic normative build) instead of building one "
+                  "from the controls; its K must match --k (checked before any map)")
+      ->check(CLI::ExistingFile);
   add_common_options(*sub);
   sub->callback([args]() { set_exit_code(run_group(*args)); });
 }});

@@ -546,6 +546,33 @@ TEST(ReliabilityCli, CohortCsvIsReadAsSpreadsheetsWriteIt) {
   EXPECT_FALSE(fs::exists(dir + "/g2"));
 }
 
+// Issue 15 item 15: `group` takes run's options and passes them to every subject; with an existing
+// reference (--normative) the patients are compared with it, none is built, and a reference of
+// another K is refused before any map is computed.
+TEST(ReliabilityCli, GroupTakesRunOptionsAndAnExistingReference) {
+  const std::string dir = test::temp_dir("rel-group-options");
+  const std::string pet = sample("sub-patient01/sub-patient01_pet.nii.gz"), ref = sample("normative.json");
+  const std::string cohort = write_cohort(dir, {"p01,patient,68.2," + pet});
+  std::string out;
+  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/k16") + " --k 16 --normative " + q(ref), &out), 2) << out;
+  EXPECT_NE(out.find("the reference has square K = 32 elements but the subjects would get square K = 16"), std::string::npos) << out;
+  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_FALSE(fs::exists(dir + "/k16")) << "refused before any folder or map";
+
+  ASSERT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/g") + " --normative " + q(ref) +
+                                  " --threshold 3 --no-rectangle -q",
+                              &out),
+            0)
+      << out;
+  const std::string subject = dir + "/g/patients/sub-p01";
+  EXPECT_FALSE(fs::exists(dir + "/g/normative.json")) << "no reference is built when one is given";
+  EXPECT_TRUE(fs::exists(subject + "/sub-p01_hemi-L_desc-z_elements.nii.gz"));
+  EXPECT_FALSE(fs::exists(subject + "/sub-p01_hemi-L_space-authalicrect_flat.surf.gii")) << "--no-rectangle was passed on";
+  std::ifstream sc(subject + "/sub-p01_hemi-L_desc-z_elements.json");
+  const std::string text((std::istreambuf_iterator<char>(sc)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"z_threshold\": 3.0"), std::string::npos) << text;
+}
+
 // Running (a zombie, reparented to an init that does not reap, counts as ended).
 bool process_alive(pid_t pid) {
   std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
