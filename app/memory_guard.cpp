@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
 
 #include "core/error.h"
 
@@ -38,6 +40,24 @@ double physical_memory_bytes() {
   return static_cast<double>(pages) * static_cast<double>(page);
 }
 
+double cgroup_memory_limit_bytes(const std::string& root) {
+  // cgroup v2: memory.max ("max" = none); v1: memory/memory.limit_in_bytes (a huge number = none).
+  for (const std::string& file : {root + "/memory.max", root + "/memory/memory.limit_in_bytes"}) {
+    std::ifstream in(file);
+    std::string text;
+    if (!(in >> text) || text == "max") continue;
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    if (end != text.c_str() && *end == '\0' && v > 0 && v < 1e18) return v;
+  }
+  return 0;
+}
+
+double available_memory_bytes() {
+  const double physical = physical_memory_bytes(), cgroup = cgroup_memory_limit_bytes("/sys/fs/cgroup");
+  return cgroup > 0 && (physical <= 0 || cgroup < physical) ? cgroup : physical;
+}
+
 double square_map_memory_bytes(long long vertices, int grid_resolution, double width) {
   // The grid flow keeps ~8 double fields of (W r) x r cells; 512^2 is part of kSquareFixed.
   const double cells = width * grid_resolution * static_cast<double>(grid_resolution);
@@ -50,18 +70,18 @@ double sphere_map_memory_bytes(long long vertices) { return kSphereFixed + kSphe
 void add_max_memory_option(CLI::App& sub, double* limit_gb) {
   sub.add_option("--max-memory", *limit_gb,
                  "Refuse up front (exit 2) when the map's estimated peak memory exceeds this many GB (default: 75% of "
-                 "the physical RAM)")
+                 "the memory available: the physical RAM, or the cgroup limit when lower, as under SLURM or a container)")
       ->check(CLI::PositiveNumber);
 }
 
 void check_memory(const std::string& what, long long vertices, double needed_bytes, double limit_gb) {
-  const double physical = physical_memory_bytes();
+  const double available = available_memory_bytes();
   const bool by_default = !(limit_gb > 0);
-  const double limit = by_default ? 0.75 * physical : limit_gb * 1e9;
+  const double limit = by_default ? 0.75 * available : limit_gb * 1e9;
   if (!(limit > 0) || needed_bytes <= limit) return;
   throw InputError(what + ": the map of " + std::to_string(vertices) + " vertices would need about " + gb(needed_bytes) +
                    " of memory, more than the limit of " + gb(limit) +
-                   (by_default ? " (75% of the " + gb(physical) + " of RAM)" : std::string(" (--max-memory)")) +
+                   (by_default ? " (75% of the " + gb(available) + " available: RAM or the cgroup limit)" : std::string(" (--max-memory)")) +
                    "; use a machine with more memory, raise --max-memory, or map a coarser surface");
 }
 

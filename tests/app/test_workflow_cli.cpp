@@ -91,5 +91,35 @@ TEST(Workflow, SnakemakeOnThePhantomCohortMergesToTheDirectReference) {
   }
 }
 
+// Issue 15 item 13: the SLURM profile is a valid Snakemake profile for this workflow, and every
+// job carries threads and resources (mem_mb, runtime) for the scheduler.
+TEST(Workflow, SlurmProfileDryRunGivesEveryJobItsResources) {
+  if (test::run_command("command -v snakemake > /dev/null 2>&1") != 0) {
+    if (test::running_in_ci()) FAIL() << "CI=true but snakemake (Debian package snakemake) is missing";
+    GTEST_SKIP() << "snakemake not installed; skipping the workflow test";
+  }
+  const std::string dir = test::temp_dir("workflow_slurm");
+  std::string log;
+  const int rc = test::run_command("snakemake -n -s " + std::string(AUTHALIC_SOURCE_DIR) + "/workflow/Snakefile --profile " +
+                                       std::string(AUTHALIC_SOURCE_DIR) + "/workflow/profiles/slurm --directory " + dir +
+                                       " --config cohort=" + kSample + "/cohort.csv out=" + dir + "/results authalic=" +
+                                       test::authalic_binary(),
+                                   &log);
+  ASSERT_EQ(rc, 0) << log;
+  EXPECT_NE(log.find("This was a dry-run"), std::string::npos) << log;
+  // One resources line per job; the runs' from the Snakefile, the merges' smaller.
+  std::size_t jobs = 0, runs = 0;
+  for (std::size_t at = log.find("resources: "); at != std::string::npos; at = log.find("resources: ", at + 1)) {
+    ++jobs;
+    const std::string line = log.substr(at, log.find('\n', at) - at);
+    EXPECT_NE(line.find("mem_mb="), std::string::npos) << line;
+    EXPECT_NE(line.find("runtime="), std::string::npos) << line;
+    runs += line.find("mem_mb=2000") != std::string::npos && line.find("runtime=30") != std::string::npos;
+  }
+  EXPECT_GT(jobs, 20u) << log;
+  EXPECT_GT(runs, 20u) << "every subject's run asks for 2000 MB and 30 minutes\n" << log;
+  EXPECT_NE(log.find("--threads 1 >"), std::string::npos) << "the run gets the rule's threads";
+}
+
 }  // namespace
 }  // namespace authalic
