@@ -565,6 +565,19 @@ void write_element_nifti(const std::string& path, const std::vector<float>& data
   io::write_nifti(path, image, o);
 }
 
+double mean_element_area(const ElementBlock& block) {
+  double sum = 0;
+  for (const auto& e : block.elements) sum += e.area_mm2;
+  return block.elements.empty() ? std::nan("") : sum / static_cast<double>(block.elements.size());
+}
+
+std::vector<float> element_image(const ElementBlock& block, const ElementGrid& grid, bool areas) {
+  std::vector<float> data(static_cast<std::size_t>(grid.num_elements()));
+  for (const auto& e : block.elements)
+    data[static_cast<std::size_t>(e.row) * grid.cols + e.col] = static_cast<float>(areas ? e.area_mm2 : e.value);
+  return data;
+}
+
 double mean_element_area(const ElementTable& table) {
   double sum = 0;
   int n = 0;
@@ -583,13 +596,10 @@ ElementOutputPaths write_element_outputs(const std::string& prefix, const Elemen
 
   write_element_table(p.csv, table);
 
-  const double element_area = mean_element_area(table);
-  std::vector<float> image(static_cast<std::size_t>(g.num_elements()));
-  for (const auto& e : block.elements) image[static_cast<std::size_t>(e.id)] = static_cast<float>(e.value);
-  write_element_nifti(p.nifti, image, g, 1, element_area, ElementImageKind::kValues,
+  const double element_area = mean_element_area(block);
+  write_element_nifti(p.nifti, element_image(block, g), g, 1, element_area, ElementImageKind::kValues,
                       "authalic element values (" + units + "), " + to_string(g.domain) + " K=" + std::to_string(g.k));
-  for (const auto& e : block.elements) image[static_cast<std::size_t>(e.id)] = static_cast<float>(e.area_mm2);
-  write_element_nifti(p.area_nifti, image, g, 1, element_area, ElementImageKind::kAreas,
+  write_element_nifti(p.area_nifti, element_image(block, g, true), g, 1, element_area, ElementImageKind::kAreas,
                       "authalic element areas (mm^2), " + to_string(g.domain) + " K=" + std::to_string(g.k));
 
   const std::vector<double> values = block_values(block);

@@ -152,8 +152,12 @@ ElementOutputPaths write_element_outputs(const std::string& prefix, const Elemen
 enum class ElementImageKind { kValues, kAreas, kZScore };
 void write_element_nifti(const std::string& path, const std::vector<float>& data, const ElementGrid& grid, int blocks,
                          double element_area_mm2, ElementImageKind kind, const std::string& description);
-// Mean element area (mm^2) over a table's blocks: the cortical area per element.
+// Mean element area (mm^2) of a block, or over a table's blocks: the cortical area per element.
+double mean_element_area(const ElementBlock& block);
 double mean_element_area(const ElementTable& table);
+// One block's element values (value, or area_mm2 with areas = true) as the data of a cols x rows
+// element image (voxel (col, row) = element row * cols + col), for write_element_nifti.
+std::vector<float> element_image(const ElementBlock& block, const ElementGrid& grid, bool areas = false);
 
 // Per-vertex values from element values: vertex v gets element_values[vertex_element(v)] (NaN for
 // a vertex in no element or an element id beyond the values).

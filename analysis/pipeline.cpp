@@ -242,19 +242,6 @@ std::string element_space_note(double element_area_mm2) {
   return s.str();
 }
 
-// One block's element values as a cols x rows image (voxel (col, row)) for write_element_nifti.
-std::vector<float> element_image(const ElementBlock& block, const ElementGrid& grid) {
-  std::vector<float> data(static_cast<std::size_t>(grid.num_elements()));
-  for (const Element& e : block.elements) data[static_cast<std::size_t>(e.row) * grid.cols + e.col] = static_cast<float>(e.value);
-  return data;
-}
-
-double block_mean_area(const ElementBlock& block) {
-  double sum = 0;
-  for (const Element& e : block.elements) sum += e.area_mm2;
-  return block.elements.empty() ? std::nan("") : sum / static_cast<double>(block.elements.size());
-}
-
 // OUT/dataset_description.json: the output folder as a BIDS derivative dataset. The same bytes for
 // every subject (no dates, no per-subject command line: those are in each file's sidecar), so runs
 // into one folder, in parallel or one after another, agree.
@@ -556,9 +543,9 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     sidecar(pet_name, {{"description", "PET per vertex (normal projection), normalised"}, {"units", table.units}});
     const std::string img_name = hp + "_desc-pet_elements.nii.gz";
     write_element_nifti((stage / img_name).string(), element_image(h.elements.block, table.grid), table.grid, 1,
-                        block_mean_area(h.elements.block), ElementImageKind::kValues, "authalic PET elements " + h.name);
+                        mean_element_area(h.elements.block), ElementImageKind::kValues, "authalic PET elements " + h.name);
     sidecar(img_name, {{"description", "element PET values, K x K (i = column, j = row from the bottom)"}, {"units", table.units},
-                       {"space", element_space_note(block_mean_area(h.elements.block))}});
+                       {"space", element_space_note(mean_element_area(h.elements.block))}});
     ScalarColouring c;
     const auto range = robust_range(h.pet);
     c.vmin = range.first;
@@ -583,11 +570,11 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       ElementBlock zb = hemis[b].elements.block;
       for (std::size_t i = 0; i < zb.elements.size(); ++i) zb.elements[i].value = z[i];
       const std::string zimg = hp + "_desc-z_elements.nii.gz";
-      write_element_nifti((stage / zimg).string(), element_image(zb, table.grid), table.grid, 1, block_mean_area(zb),
+      write_element_nifti((stage / zimg).string(), element_image(zb, table.grid), table.grid, 1, mean_element_area(zb),
                           ElementImageKind::kZScore, "authalic z " + hemis[b].name);
       sidecar(zimg, {{"description", "element z-scores, z = (factor x patient - reference mean) / (reference SD x sqrt(1 + 1/n)); "
                                      "factor: the patient's rescaling to the reference over its normal elements (1 = none)"},
-                     {"space", element_space_note(block_mean_area(zb))},
+                     {"space", element_space_note(mean_element_area(zb))},
                      {"rescale_factor", cmp.scale},
                      {"rescale_elements", cmp.scale_elements}});
       ScalarColouring zc;
