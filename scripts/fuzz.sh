@@ -3,6 +3,8 @@
 #   scripts/fuzz.sh            # 60 s per target
 #   scripts/fuzz.sh 600        # longer run
 #   FUZZ_TARGETS="gifti nifti" scripts/fuzz.sh 30
+#   FUZZ_SEED=0 scripts/fuzz.sh 600   # a random seed (default 1: the same mutation sequence on
+#                                     # every run, so a short CI run does not fail by chance)
 # Builds into build-fuzz/ (override with FUZZ_BUILD_DIR), writes a seed corpus of small valid
 # files made by the project's own writers (plus a few from nibabel when available), then runs
 # each target. Crashes, leaks, timeouts (> 10 s per input), out-of-memory (> 2 GB) and
@@ -14,6 +16,7 @@ SECONDS_PER_TARGET="${1:-60}"
 BUILD="${FUZZ_BUILD_DIR:-build-fuzz}"
 TARGETS=(${FUZZ_TARGETS:-freesurfer_surface freesurfer_curv freesurfer_label freesurfer_patch gifti nifti mgh ply obj stl vtk})
 JOBS="${FUZZ_BUILD_JOBS:-2}"
+SEED="${FUZZ_SEED:-1}"
 
 if ! command -v clang++ >/dev/null; then
   echo "fuzz.sh: clang++ not found (Debian: apt-get install clang libclang-rt-14-dev libomp-dev)" >&2
@@ -56,7 +59,7 @@ for t in "${TARGETS[@]}"; do
   [ -f "tests/fuzz/$t.dict" ] && dict=(-dict="tests/fuzz/$t.dict")
   set +e
   "$BUILD/tests/fuzz/fuzz_$t" "$CORPUS/$t" "$CORPUS/seeds/$t" "${dict[@]}" \
-    -max_total_time="$SECONDS_PER_TARGET" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+    -max_total_time="$SECONDS_PER_TARGET" -seed="$SEED" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
     -print_final_stats=1 -artifact_prefix="$ARTIFACTS/$t-" >"$log" 2>&1
   rc=$?
   set -e

@@ -3,7 +3,9 @@
 
 #include <cstdint>
 #include <cstring>
+#include <vector>
 
+#include "io/base64.h"
 #include "io/io_test_util.h"
 #include "io/surface_formats.h"
 #include "io/surface_io.h"
@@ -214,6 +216,17 @@ TEST(VtkHostile, VtpDeclaringHugeCounts) {
   const std::size_t data = w.find('_', w.find("<AppendedData")) + 1;
   w.replace(data, 8, "////fwCA");  // base64 of ff ff ff 7f 00 80: block count 2^31 - 1, block size kept
   expect_refused(dir + "/blocks.vtp", w, "compressed array declares 2147483647 blocks");
+  // Found by fuzz_vtk (CI): one block whose compressed size claims 2.9 GB; VTK allocated it.
+  // The writer's first header is [blocks][block size][last size][compressed size] in UInt32
+  // (16 bytes = 24 base64 digits), then the data; the compressed size is rewritten.
+  std::string c = read_bytes(dir + "/w.vtp");
+  std::vector<std::uint8_t> header = base64_decode(c.substr(data, 24));
+  ASSERT_EQ(header.size(), 16u);
+  ASSERT_EQ(header[0], 1u);  // one block: the octahedron's 6 points
+  const std::uint32_t huge = 2919235603u;
+  std::memcpy(header.data() + 12, &huge, 4);
+  c.replace(data, 24, base64_encode(header));
+  expect_refused(dir + "/csize.vtp", c, "compressed block 1 of 1 declares 2919235603 bytes but");
 }
 
 TEST(VtkHostile, ObjVertexLinesAreValidated) {
