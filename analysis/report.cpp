@@ -183,7 +183,8 @@ std::string report_html(const ReportData& d) {
     if (has_flat && z.size() == h.flat_uv.rows()) {
       fo.title = capitalised(h.name) + ": z";
       figure(out, render_flat(h.flat_uv, h.faces, z_colouring(z), fo), h.name + " hemisphere z-score flat map",
-             "z = (patient - normal mean) / normal SD per element; blue = lower than normal." + grid_text);
+             "z = (patient - controls' mean) / predictive SD (the controls' SD x sqrt(1 + 1/n), n controls) per element; "
+             "blue = lower than normal." + grid_text);
     } else if (!h.element_z.empty() && h.grid_cols > 0 && h.grid_rows > 0) {
       const int cell = std::max(4, 320 / h.grid_cols);
       figure(out, render_element_grid(h.element_z, h.grid_rows, h.grid_cols, z_colouring(VectorXd()), cell, capitalised(h.name) + ": z"),

@@ -89,6 +89,31 @@ CLI::Validator age_years() {
       "YEARS (0-130]");
 }
 
+// Every option's default in its --help line ("--k INT=32"), also where the command did not ask
+// for it. A value that stands for "not given" (-1, nan, an age of 0, an empty list) fails the
+// option's own check or is empty: it is not shown, the help text says what happens then.
+static bool is_valid_value(CLI::Option& option, const std::string& value) {
+  for (int i = 0;; ++i) {
+    CLI::Validator* check = nullptr;
+    try {
+      check = option.get_validator(i);
+    } catch (const CLI::OptionNotFound&) {
+      return true;
+    }
+    if (!(*check)(value).empty()) return false;
+  }
+}
+
+static void show_defaults(CLI::App& command) {
+  for (CLI::Option* o : command.get_options()) {
+    if (o->get_type_size() == 0) continue;  // a flag
+    o->capture_default_str();
+    const std::string value = o->get_default_str();
+    if (value == "[]" || value == "nan" || value == "-1" || !is_valid_value(*o, value)) o->default_str("");
+  }
+  for (CLI::App* sub : command.get_subcommands([](CLI::App*) { return true; })) show_defaults(*sub);
+}
+
 void add_common_options(CLI::App& sub) {
   auto& g = global_options();
   sub.add_flag("--quiet,-q", g.quiet, "No progress or informational output");
@@ -176,6 +201,7 @@ int main(int argc, char** argv) {
   auto commands = app::registry();
   std::sort(commands.begin(), commands.end(), [](const app::Command& a, const app::Command& b) { return a.order < b.order; });
   for (const auto& c : commands) c.setup(cli);
+  app::show_defaults(cli);
 
   try {
     cli.parse(argc, argv);

@@ -121,5 +121,34 @@ TEST(Workflow, SlurmProfileDryRunGivesEveryJobItsResources) {
   EXPECT_NE(log.find("--threads 1 >"), std::string::npos) << "the run gets the rule's threads";
 }
 
+// Issue 15 item 18: run from any folder without --config authalic=, the workflow takes the
+// build beside its Snakefile (REPO/build/authalic); with none there and none on PATH it stops
+// with one line naming the fix. A copy of the workflow in a made-up repository layout.
+TEST(Workflow, FindsTheExecutableBesideItsSnakefileOrSaysHowToPassIt) {
+  if (test::run_command("command -v snakemake > /dev/null 2>&1") != 0) {
+    if (test::running_in_ci()) FAIL() << "CI=true but snakemake (Debian package snakemake) is missing";
+    GTEST_SKIP() << "snakemake not installed; skipping the workflow test";
+  }
+  namespace fs = std::filesystem;
+  const std::string dir = test::temp_dir("workflow_find");
+  for (const char* repo : {"with", "without"}) {
+    fs::create_directories(dir + "/" + repo + "/workflow");
+    fs::copy_file(std::string(AUTHALIC_SOURCE_DIR) + "/workflow/Snakefile", dir + "/" + repo + "/workflow/Snakefile",
+                  fs::copy_options::overwrite_existing);
+  }
+  fs::create_directories(dir + "/with/build");
+  fs::create_symlink(test::authalic_binary(), dir + "/with/build/authalic");
+  fs::create_directories(dir + "/elsewhere");
+  const std::string config = " --config cohort=" + kSample + "/cohort.csv out=" + dir + "/results";
+  // PATH without any authalic: only the system folders.
+  const std::string env = "cd " + dir + "/elsewhere && PATH=/usr/bin:/bin ";
+  std::string log;
+  ASSERT_EQ(test::run_command(env + "snakemake -n -p -s " + dir + "/with/workflow/Snakefile -j1" + config, &log), 0) << log;
+  EXPECT_NE(log.find(dir + "/with/build/authalic run "), std::string::npos) << log;
+  EXPECT_NE(test::run_command(env + "snakemake -n -p -s " + dir + "/without/workflow/Snakefile -j1" + config, &log), 0) << log;
+  EXPECT_NE(log.find("authalic executable not found: not in " + dir + "/without/build/authalic and not on PATH"), std::string::npos) << log;
+  EXPECT_NE(log.find("--config authalic=/path/to/authalic"), std::string::npos) << log;
+}
+
 }  // namespace
 }  // namespace authalic
