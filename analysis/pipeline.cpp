@@ -35,6 +35,7 @@
 #include "io/lock_file.h"
 #include "io/registration.h"
 #include "io/surface_io.h"
+#include "io/workbench_spec.h"
 #include "io/volume_io.h"
 
 namespace fs = std::filesystem;
@@ -147,6 +148,16 @@ std::string load_hemisphere(Hemisphere& h, const std::string& white, const std::
   for (int v = 0; v < n; ++v)
     if (used[v]) h.cortex.push_back(v);
   return region.note;
+}
+
+// A surface in scanner RAS (mm), the PET's world: FreeSurfer's tkregister coordinates moved by
+// c_ras (io::Surface::to_scanner), so Workbench shows it over the PET and the T1 without a transform.
+TriMesh in_scanner_ras(const io::Surface& s) {
+  TriMesh m = s.mesh;
+  const Eigen::Matrix3d A = s.to_scanner.topLeftCorner<3, 3>();
+  const Eigen::Vector3d t = s.to_scanner.topRightCorner<3, 1>();
+  m.V = (m.V * A.transpose()).rowwise() + t.transpose();
+  return m;
 }
 
 }  // namespace
@@ -486,13 +497,17 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
                  {"z_threshold", options.z_threshold},
                  {"z_age_adjusted", compare && cmp.age_adjusted},
                  {"rescale_to_reference", options.rescale}};
+  // The subject as BIDS participants.tsv describes one (null: not given).
+  const json participant = {{"participant_id", "sub-" + in.id},
+                            {"age", in.age > 0 ? json(in.age) : json(nullptr)},
+                            {"sex", in.sex.empty() ? json(nullptr) : json(in.sex)}};
   // One JSON sidecar per BIDS base name (x.nii.gz and x.png share x.json, which lists both).
   std::map<std::string, json> sidecars;
   auto sidecar = [&](const std::string& file, const json& extra) {
     const std::string base = file.substr(0, file.find('.'));
     json& j = sidecars[base];
     if (j.is_null()) {
-      j = {{"software", software_version()}, {"parameters", params}, {"inputs", checksums}};
+      j = {{"software", software_version()}, {"parameters", params}, {"inputs", checksums}, {"participant", participant}};
       if (!options.command_line.empty()) j["command_line"] = options.command_line;
     }
     j["files"].push_back(file);
@@ -500,6 +515,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     summary.files.push_back(file);
   };
   const int K = options.k;
+  std::vector<io::SpecEntry> spec;  // sub-<id>.wb.spec: the files wb_view opens together
   for (Hemisphere& h : hemis) {
     const std::string hp = prefix + "_hemi-" + h.tag;
     // Flat map scaled so 1 mm^2 flat = 1 mm^2 cortex (on average).
@@ -512,8 +528,26 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     wo.anatomical_structure = h.left ? "CortexLeft" : "CortexRight";
     wo.geometric_type = "Flat";
     wo.metadata = {{"units", "mm"}, {"space", "authalic square map scaled to cortical area (mm^2 flat = mm^2 cortex)"}};
+    // The subject's own surfaces, which every per-vertex file below pairs with (Workbench spec).
+    for (const auto& [surface, kind] : {std::pair<const io::Surface*, const char*>{&h.white, "white"}, {&h.pial, "pial"}}) {
+      io::SurfaceWriteOptions anatomical;
+      anatomical.anatomical_structure = wo.anatomical_structure;
+      anatomical.geometric_type = "Anatomical";
+      anatomical.space = "NIFTI_XFORM_SCANNER_ANAT";
+      anatomical.metadata = {{"AnatomicalStructureSecondary", std::string(kind) == "white" ? "GrayWhite" : "Pial"},
+                     {"units", "mm"}, {"space", "scanner RAS (mm), the PET's world coordinates"}};
+      const std::string name = hp + "_" + kind + ".surf.gii";
+      io::write_surface((stage / name).string(), in_scanner_ras(*surface), anatomical);
+      sidecar(name, {{"description", std::string("the subject's ") + kind + " surface in scanner RAS (mm), as read from " +
+                                         (std::string(kind) == "white" ? (h.left ? in.lh_white : in.rh_white) : (h.left ? in.lh_pial : in.rh_pial))}});
+      spec.push_back({wo.anatomical_structure, "SURFACE", name});
+    }
     const std::string flat_name = hp + "_space-authalic_flat.surf.gii";
     io::write_surface((stage / flat_name).string(), flat, wo);
+    // Per-vertex files show on the flat map in Workbench when it has the surface's vertices (the map
+    // inserts vertices only where a triangle has all three corners on the boundary).
+    const bool flat_pairs = flat.num_vertices() == h.white.mesh.num_vertices();
+    if (flat_pairs) spec.push_back({wo.anatomical_structure, "SURFACE", flat_name});
     sidecar(flat_name, {{"description", "authalic flat map; square side sqrt(cortical area) mm"},
                         {"metrics", {{"flips", h.metrics.flips}, {"element_area_cv", h.metrics.element_cv}}}});
     if (options.rectangle) {
@@ -529,6 +563,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       ro.metadata["space"] = "authalic whole-brain 2:1 rectangle scaled to the cortical area of both hemispheres (mm)";
       const std::string rect_name = hp + "_space-authalicrect_flat.surf.gii";
       io::write_surface((stage / rect_name).string(), rflat, ro);
+      if (rflat.num_vertices() == h.white.mesh.num_vertices()) spec.push_back({wo.anatomical_structure, "SURFACE", rect_name});
       sidecar(rect_name, {{"description", "this hemisphere's part of the whole-brain 2:1 rectangle (left part x in [0, w_L], "
                                           "right part [w_L, 2] before scaling by sqrt(total cortical area / 2) mm)"},
                           {"metrics", {{"flips", rect_metrics.flips}, {"element_area_cv", rect_metrics.element_cv},
@@ -540,6 +575,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     fo.metadata = {{"normalisation", table.normalisation}, {"units", table.units}, {"sampling", h.sampling.method}};
     const std::string pet_name = hp + "_desc-pet.func.gii";
     io::write_per_vertex((stage / pet_name).string(), h.pet, fo);
+    spec.push_back({wo.anatomical_structure, "METRIC", pet_name});
     sidecar(pet_name, {{"description", "PET per vertex (normal projection), normalised"}, {"units", table.units}});
     const std::string img_name = hp + "_desc-pet_elements.nii.gz";
     write_element_nifti((stage / img_name).string(), element_image(h.elements.block, table.grid), table.grid, 1,
@@ -557,6 +593,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     sidecar(png_name, {{"description", "element PET values"}});
     const std::string labels_name = hp + "_desc-elements.label.gii";
     write_element_labels((stage / labels_name).string(), h.elements, table.grid);
+    spec.push_back({wo.anatomical_structure, "LABEL", labels_name});
     sidecar(labels_name, {{"description", "each vertex's equal-area element: key = element id + 1 (id = row x K + column), 0 = "
                                           "in no element; pairs with the white and pial surfaces (the input's vertices)"}});
   }
@@ -593,18 +630,25 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       io::write_per_vertex((stage / zfunc).string(), element_values_at_vertices(hemis[b].elements.vertex_element, z.data(),
                                                                                  static_cast<int>(z.size())), zo);
       sidecar(zfunc, {{"description", "per-vertex z: the z of the vertex's element; pairs with the white and pial surfaces"}});
+      spec.push_back({zo.anatomical_structure, "METRIC", zfunc});
     }
     const std::string clusters_name = prefix + "_desc-clusters.tsv";
     io::write_file_atomically((stage / clusters_name).string(), clusters_tsv(cmp.clusters));
     sidecar(clusters_name, clusters_tsv_sidecar(options.z_threshold));
   }
+  const std::string spec_name = prefix + ".wb.spec";
+  io::write_workbench_spec((stage / spec_name).string(), spec);
+  summary.files.push_back(spec_name);
 
   if (options.report) {
     ReportData rd;
     rd.subject_id = in.id;
     rd.software = software_version();
     rd.pet_units = table.units;
-    rd.subject_info = {{"PET", fs::path(in.pet).filename().string()}, {"age", in.age > 0 ? std::to_string(in.age) : "unknown"}};
+    char age[32] = "unknown";
+    if (in.age > 0) std::snprintf(age, sizeof(age), "%g", in.age);
+    rd.subject_info = {{"PET", fs::path(in.pet).filename().string()}, {"age", age},
+                       {"sex", in.sex.empty() ? "unknown" : in.sex == "F" ? "female" : in.sex == "M" ? "male" : "other"}};
     for (const std::string& w : summary.warnings) rd.notes.push_back("Warning: " + w + ".");
     for (const auto& [k, v] : params.items()) rd.parameters.emplace_back(k, v.is_string() ? v.get<std::string>() : v.dump());
     for (int b = 0; b < 2; ++b) {

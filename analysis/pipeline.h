@@ -23,6 +23,7 @@ struct SubjectInputs {
   std::string t1;                                    // optional, for --register
   std::string normative;                             // optional reference (authalic normative build)
   double age = 0;                                    // years, 0 = unknown
+  std::string sex;                                   // "F", "M", "O" or empty (unknown)
 };
 
 // FreeSurfer subject folder -> inputs: surf/?h.white, surf/?h.pial, label/?h.cortex.label;

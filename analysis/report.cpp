@@ -12,6 +12,7 @@
 #include "analysis/render.h"
 #include "io/atomic_file.h"
 #include "io/base64.h"
+#include "io/markup_escape.h"
 
 namespace authalic::analysis {
 
@@ -87,21 +88,7 @@ std::string capitalised(std::string s) {
 
 }  // namespace
 
-std::string html_escape(const std::string& text) {
-  std::string out;
-  out.reserve(text.size());
-  for (char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
+std::string html_escape(const std::string& text) { return io::markup_escape(text); }
 
 std::string png_data_uri(const io::RgbImage& image) { return "data:image/png;base64," + io::base64_encode(io::encode_png(image)); }
 

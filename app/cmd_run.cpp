@@ -91,7 +91,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
       "run",
       "Per-subject pipeline: load and check inputs -> authalic square map per hemisphere -> PET by normal projection "
       "(inward from the pial surface) -> equal-area elements -> z-scores against a normative reference (if given) "
-      "-> report. Writes OUT/sub-<id>/ (BIDS-derivative names, a JSON sidecar per file, report.html, log.txt); "
+      "-> report. Writes OUT/sub-<id>/ (BIDS-derivative names, a JSON sidecar per file, the white and pial surfaces in scanner RAS, a Workbench spec sub-<id>.wb.spec, report.html, log.txt); "
       "the folder appears only when complete. Surfaces in tkregister RAS (FreeSurfer) are moved to scanner RAS "
       "with their footer's c_ras. Exit codes: 0 ok, 2 bad input, 3 processing failure.");
   auto& in = a->inputs;
@@ -112,6 +112,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
                 "Refuse a --normative reference with an age model when --age is not given (else: a warning, z not age adjusted)");
   sub->add_flag("--sum-frames", a->options.pet_sum_frames, "4D PET: sum all frames (a static image from dynamic frames)");
   sub->add_option("--age", in.age, "Age in years (used by references with an age model)")->check(age_years());
+  sub->add_option("--sex", in.sex, "Sex, recorded in the report and the sidecars: F, M or O (female, male, other)")->transform(sex_letter());
   sub->add_option("--out", a->options.out_dir, "Output folder; the subject goes to OUT/sub-<id>")->required();
   sub->add_flag("--force", a->options.force, "Replace an existing OUT/sub-<id>");
   sub->add_option("--k", a->options.k, "Elements: K x K per hemisphere (equal-area cells)")->check(in_range(2, 512));

@@ -3,6 +3,8 @@
 // README cannot drift from what the program does.
 #include <gtest/gtest.h>
 
+#include <iterator>
+
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -100,4 +102,44 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   EXPECT_LT(z.array().isNaN().select(0.0, z.array()).minCoeff(), -2.0) << "the planted region is hypometabolic";
   const authalic::VectorXd labels = authalic::io::read_per_vertex((subject / (stem + "_hemi-L_desc-elements.label.gii")).string(), nv);
   EXPECT_GT(labels.maxCoeff(), 1000.0);  // element ids + 1 up to K^2 = 1024
+
+  // Issue 15 item 7: a Workbench spec per subject names the surfaces and the per-vertex files on
+  // them; wb_command reads it, and every file it lists opens in wb_command with the structure the
+  // spec gives it and, per-vertex, the surface's vertex count.
+  const authalic::io::Surface input_white = authalic::io::read_surface((root / white[1].str()).string());
+  const authalic::io::Surface written_white = authalic::io::read_surface((subject / (stem + "_hemi-L_white.surf.gii")).string());
+  ASSERT_EQ(written_white.mesh.num_vertices(), nv);
+  const Eigen::Vector4d v0 = input_white.to_scanner * input_white.mesh.V.row(0).transpose().homogeneous();
+  EXPECT_LT((written_white.mesh.V.row(0).transpose() - v0.head<3>()).norm(), 1e-3) << "written in scanner RAS";
+  const fs::path spec_path = subject / (stem + ".wb.spec");
+  ASSERT_TRUE(fs::exists(spec_path));
+  if (authalic::test::run_command("command -v wb_command > /dev/null 2>&1") != 0) {
+    if (authalic::test::running_in_ci()) FAIL() << "CI=true but wb_command (connectome-workbench) is missing";
+    return;
+  }
+  std::string info;
+  ASSERT_EQ(authalic::test::run_command("wb_command -file-information '" + spec_path.string() + "'", &info), 0) << info;
+  EXPECT_NE(info.find("Specification"), std::string::npos) << info;
+  std::ifstream spec_in(spec_path);
+  const std::string spec((std::istreambuf_iterator<char>(spec_in)), std::istreambuf_iterator<char>());
+  const std::regex entry("Structure=\"(\\w+)\" DataFileType=\"(\\w+)\" Selected=\"true\">\\s*(\\S+)\\s*</DataFile>");
+  int entries = 0, metrics = 0, surfaces = 0;
+  for (auto it = std::sregex_iterator(spec.begin(), spec.end(), entry); it != std::sregex_iterator(); ++it) {
+    const std::string structure = (*it)[1], type = (*it)[2], file = (*it)[3];
+    ++entries;
+    metrics += type == "METRIC";
+    surfaces += type == "SURFACE";
+    EXPECT_NE(info.find(file), std::string::npos) << "wb_command lists " << file << "\n" << info;
+    std::string file_info;
+    ASSERT_EQ(authalic::test::run_command("wb_command -file-information '" + (subject / file).string() + "'", &file_info), 0) << file_info;
+    EXPECT_NE(file_info.find(structure), std::string::npos) << file << "\n" << file_info;
+    if (type != "SURFACE") {
+      EXPECT_TRUE(std::regex_search(file_info, std::regex("Number of Vertices:\\s+" + std::to_string(nv) + "\\n"))) << file_info;
+    }
+  }
+  // Per hemisphere: white, pial, the two flat maps (the sample's have the surface's vertices),
+  // PET, z and elements.
+  EXPECT_EQ(entries, 14) << spec;
+  EXPECT_EQ(surfaces, 8) << spec;
+  EXPECT_EQ(metrics, 4) << spec;
 }
