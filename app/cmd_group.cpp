@@ -139,6 +139,8 @@ std::vector<std::string> subject_args(const std::string& exe, const CohortSubjec
           "--rh-pial", s.rh_pial, "--lh-cortex", s.lh_cortex, "--rh-cortex", s.rh_cortex, "--pet", s.pet,
           "--k", std::to_string(k), "--threads", std::to_string(threads), "--out", out, "--force"};  // progress lines into the log
   if (s.age > 0) args.insert(args.end(), {"--age", std::to_string(s.age)});  // unknown: left out
+  if (!s.t1.empty()) args.insert(args.end(), {"--t1", s.t1});                // the PET is registered to it
+  if (!s.sex.empty()) args.insert(args.end(), {"--sex", s.sex});
   return args;
 }
 
@@ -242,7 +244,8 @@ const bool registered = register_command({60, [](CLI::App& parent) {
       "Run the per-subject pipeline for a cohort (controls first), build the normative reference from the "
       "controls (or take an existing one, --normative), then compare the patients with it; run's --normalize, "
       "--threshold, --no-rectangle and --no-rescale apply to every subject. COHORT.csv columns: subject_id,role(control|patient),age,"
-      "pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex (paths relative to the CSV; RFC 4180 CSV as spreadsheets "
+      "pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex, optional t1 (run --t1: the PET is registered to it) and "
+      "sex (F, M, O) (paths relative to the CSV; RFC 4180 CSV as spreadsheets "
       "write it: quoted fields, CRLF, a UTF-8 byte-order mark). Writes "
       "OUT/controls/sub-<id>/, OUT/patients/sub-<id>/, OUT/normative.json and OUT/logs/<id>.log (each subject's progress and messages). "
       "A failed subject is reported and does not stop the others (exit 3 at the end).");

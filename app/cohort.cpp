@@ -123,6 +123,8 @@ std::vector<CohortSubject> read_cohort(const std::string& path) {
     s.rh_pial = file("rh_pial");
     s.lh_cortex = file("lh_cortex");
     s.rh_cortex = file("rh_cortex");
+    if (col.count("t1") && !get("t1").empty()) s.t1 = file("t1");
+    if (col.count("sex") && !get("sex").empty()) s.sex = parse_sex(get("sex"), where);
     subjects.push_back(std::move(s));
   }
   if (subjects.empty()) throw InputError(path + ": no subjects listed");

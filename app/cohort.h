@@ -2,6 +2,8 @@
 // Cohort lists for group runs: a CSV with a header naming the columns
 //   subject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex
 // (extra columns are ignored; paths are relative to the CSV's folder; role is control or patient).
+// Optional columns: t1 (the T1 MRI: the PET is registered to it, run --t1) and sex (F, M or O;
+// female, male, other accepted; recorded in the report).
 #include <string>
 #include <vector>
 
@@ -11,6 +13,8 @@ struct CohortSubject {
   std::string id, role;
   double age = 0;
   std::string pet, lh_white, lh_pial, rh_white, rh_pial, lh_cortex, rh_cortex;  // absolute paths
+  std::string t1;   // optional, absolute path
+  std::string sex;  // optional: "F", "M" or "O"
 };
 
 // Throws InputError naming the file and line for a missing column, an empty id, a duplicate id,

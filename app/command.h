@@ -36,6 +36,11 @@ CLI::Validator in_range(double lo, double hi);
 CLI::Validator age_years();
 // The same rule for text (a cohort CSV cell); returns the age or throws InputError("<where>: ...").
 double parse_age(const std::string& text, const std::string& where);
+// Sex as BIDS participants.tsv writes it: F, M or O (female, male, other in any case accepted);
+// returns the letter or throws InputError("<where>: ...").
+std::string parse_sex(const std::string& text, const std::string& where);
+// Validator form of parse_sex for --sex; the value is rewritten to its letter.
+CLI::Validator sex_letter();
 
 // Adds --quiet/--json/--threads to a subcommand.
 void add_common_options(CLI::App& sub);

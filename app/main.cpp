@@ -76,6 +76,28 @@ double parse_age(const std::string& text, const std::string& where) {
   return age;
 }
 
+std::string parse_sex(const std::string& text, const std::string& where) {
+  std::string t;
+  for (char c : text) t += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (t == "f" || t == "female") return "F";
+  if (t == "m" || t == "male") return "M";
+  if (t == "o" || t == "other") return "O";
+  throw InputError((where.empty() ? "" : where + ": ") + "sex '" + text + "' is not F, M or O (female, male, other); leave it out when unknown");
+}
+
+CLI::Validator sex_letter() {
+  return CLI::Validator(
+      [](std::string& value) -> std::string {
+        try {
+          value = parse_sex(value, "");
+        } catch (const InputError& e) {
+          return e.what();
+        }
+        return {};
+      },
+      "F|M|O");
+}
+
 CLI::Validator age_years() {
   return CLI::Validator(
       [](std::string& value) -> std::string {

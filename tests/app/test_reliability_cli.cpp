@@ -16,6 +16,8 @@
 #include <sstream>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
 #include "analysis/elements.h"
 #include "analysis/normative.h"
 #include "common/hard_meshes.h"
@@ -571,6 +573,42 @@ TEST(ReliabilityCli, GroupTakesRunOptionsAndAnExistingReference) {
   std::ifstream sc(subject + "/sub-p01_hemi-L_desc-z_elements.json");
   const std::string text((std::istreambuf_iterator<char>(sc)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("\"z_threshold\": 3.0"), std::string::npos) << text;
+}
+
+// Issue 15 item 14: the optional cohort columns sex (F, M, O; female/male/other accepted) and t1
+// (the T1 the PET is registered to) are read, checked with the file and line, and passed to run:
+// the sex reaches every sidecar's participant record.
+TEST(ReliabilityCli, CohortOptionalSexAndT1Columns) {
+  const std::string dir = test::temp_dir("rel-group-sex");
+  const std::string pet = sample("sub-patient01/sub-patient01_pet.nii.gz"), ref = sample("normative.json");
+  const std::string files = "," + sample("surf/lh.white") + "," + sample("surf/lh.pial") + "," + sample("surf/rh.white") + "," +
+                            sample("surf/rh.pial") + "," + sample("label/lh.cortex.label") + "," + sample("label/rh.cortex.label");
+  const auto cohort = [&](const std::string& name, const std::string& extra_header, const std::string& extra) {
+    std::ofstream c(dir + "/" + name);
+    c << "subject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex" << extra_header << "\n"
+      << "p01,patient,68.2," << pet << files << extra << "\n";
+    return dir + "/" + name;
+  };
+  std::string out;
+  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort("badsex.csv", ",sex", ",x")) + " " + q(dir + "/b"), &out), 2) << out;
+  EXPECT_NE(out.find("badsex.csv:2: sex 'x' is not F, M or O"), std::string::npos) << out;
+  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort("badt1.csv", ",t1", "," + dir + "/none.nii")) + " " + q(dir + "/t"), &out), 2) << out;
+  EXPECT_NE(out.find("badt1.csv:2: t1 file " + dir + "/none.nii does not exist"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/b"));
+  EXPECT_FALSE(fs::exists(dir + "/t"));
+  ASSERT_EQ(test::run_command(bin() + " group " + q(cohort("ok.csv", ",sex,t1", ",female,")) + " " + q(dir + "/g") +
+                                  " --normative " + q(ref) + " --no-rectangle -q",
+                              &out),
+            0)
+      << out;
+  std::ifstream sc(dir + "/g/patients/sub-p01/sub-p01_hemi-L_desc-z_elements.json");
+  const auto j = nlohmann::json::parse(sc);
+  EXPECT_EQ(j.at("participant").at("sex"), "F") << j.dump(1);
+  EXPECT_DOUBLE_EQ(j.at("participant").at("age").get<double>(), 68.2);
+  EXPECT_EQ(j.at("participant").at("participant_id"), "sub-p01");
+  EXPECT_EQ(test::run_command(bin() + " run --sex q --out " + q(dir + "/r"), &out), 2) << out;
+  EXPECT_NE(out.find("sex 'q' is not F, M or O"), std::string::npos) << out;
 }
 
 // Running (a zombie, reparented to an init that does not reap, counts as ended).
