@@ -25,6 +25,7 @@
 #include "analysis/normative.h"
 #include "app/command.h"
 #include "core/error.h"
+#include "io/atomic_file.h"
 
 extern char** environ;
 namespace fs = std::filesystem;
@@ -155,6 +156,33 @@ void check_reference(const GroupArgs& a) {
                      std::to_string(ref.grid.k) + " or a reference built with K = " + std::to_string(a.k));
 }
 
+// OUT/participants.tsv (+ .json describing the columns), as a BIDS dataset lists its subjects:
+// one row per cohort subject in cohort order, with where its outputs are and whether it ran.
+void write_participants(const std::string& out, const std::vector<CohortSubject>& subjects, const std::vector<Job>& controls,
+                        const std::vector<Job>& patients) {
+  std::map<std::string, int> exit_code;
+  for (const auto* group : {&controls, &patients})
+    for (const auto& j : *group) exit_code[j.id] = j.exit_code;
+  std::string tsv = "participant_id\tgroup\tage\tsex\tfolder\tstatus\n";
+  for (const auto& s : subjects) {
+    char age[32] = "n/a";
+    if (s.age > 0) std::snprintf(age, sizeof(age), "%g", s.age);
+    const int code = exit_code.count(s.id) ? exit_code[s.id] : -1;
+    tsv += "sub-" + s.id + "\t" + s.role + "\t" + age + "\t" + (s.sex.empty() ? "n/a" : s.sex) + "\t" +
+           (s.role == "control" ? "controls/sub-" : "patients/sub-") + s.id + "\t" +
+           (code == 0 ? "ok" : "failed (exit " + std::to_string(code) + ", see logs/" + s.id + ".log)") + "\n";
+  }
+  io::write_file_atomically((fs::path(out) / "participants.tsv").string(), tsv);
+  const nlohmann::json columns = {
+      {"participant_id", {{"Description", "sub-<subject_id of the cohort CSV>"}}},
+      {"group", {{"Description", "role in the cohort"}, {"Levels", {{"control", "in the normative reference"}, {"patient", "compared with it"}}}}},
+      {"age", {{"Description", "age at the scan"}, {"Units", "year"}}},
+      {"sex", {{"Description", "sex as given in the cohort CSV"}, {"Levels", {{"F", "female"}, {"M", "male"}, {"O", "other"}}}}},
+      {"folder", {{"Description", "the subject's outputs (authalic run), relative to this file"}}},
+      {"status", {{"Description", "ok, or failed with run's exit code and the log to read"}}}};
+  io::write_file_atomically((fs::path(out) / "participants.json").string(), columns.dump(2) + "\n");
+}
+
 int run_group(const GroupArgs& a) {
   const auto subjects = read_cohort(a.cohort);
   check_reference(a);
@@ -228,6 +256,7 @@ int run_group(const GroupArgs& a) {
       summary["subjects"].push_back({{"id", j.id}, {"exit_code", j.exit_code}, {"seconds", j.seconds}, {"log", j.log}});
       if (j.exit_code != 0) ++failed;
     }
+  write_participants(a.out, subjects, controls, patients);
   summary["reference_exit_code"] = reference_exit;
   summary["failed"] = failed;
   if (global_options().json) std::cout << summary.dump(2) << '\n';
@@ -247,7 +276,7 @@ const bool registered = register_command({60, [](CLI::App& parent) {
       "pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex, optional t1 (run --t1: the PET is registered to it) and "
       "sex (F, M, O) (paths relative to the CSV; RFC 4180 CSV as spreadsheets "
       "write it: quoted fields, CRLF, a UTF-8 byte-order mark). Writes "
-      "OUT/controls/sub-<id>/, OUT/patients/sub-<id>/, OUT/normative.json and OUT/logs/<id>.log (each subject's progress and messages). "
+      "OUT/controls/sub-<id>/, OUT/patients/sub-<id>/, OUT/participants.tsv (+ .json: group, age, sex, folder, status), OUT/normative.json and OUT/logs/<id>.log (each subject's progress and messages). "
       "A failed subject is reported and does not stop the others (exit 3 at the end).");
   sub->add_option("cohort", args->cohort, "Cohort list (CSV)")->required()->check(CLI::ExistingFile);
   sub->add_option("out", args->out, "Output folder")->required();

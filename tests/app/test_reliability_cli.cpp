@@ -607,6 +607,13 @@ TEST(ReliabilityCli, CohortOptionalSexAndT1Columns) {
   EXPECT_EQ(j.at("participant").at("sex"), "F") << j.dump(1);
   EXPECT_DOUBLE_EQ(j.at("participant").at("age").get<double>(), 68.2);
   EXPECT_EQ(j.at("participant").at("participant_id"), "sub-p01");
+  std::ifstream tsv(dir + "/g/participants.tsv");
+  std::string header, row;
+  ASSERT_TRUE(std::getline(tsv, header) && std::getline(tsv, row));
+  EXPECT_EQ(header, "participant_id\tgroup\tage\tsex\tfolder\tstatus");
+  EXPECT_EQ(row, "sub-p01\tpatient\t68.2\tF\tpatients/sub-p01\tok");
+  std::ifstream columns(dir + "/g/participants.json");
+  EXPECT_EQ(nlohmann::json::parse(columns).at("age").at("Units"), "year");
   EXPECT_EQ(test::run_command(bin() + " run --sex q --out " + q(dir + "/r"), &out), 2) << out;
   EXPECT_NE(out.find("sex 'q' is not F, M or O"), std::string::npos) << out;
 }
