@@ -222,6 +222,8 @@ void run(const FlattenArgs& a) {
                  {"authalic_input_vertices", std::to_string(r.num_input_vertices)},
                  {"authalic_cortical_area_mm2", std::to_string(r.surface_area)},
                  {"authalic_acceptance", problem.empty() ? "passed" : "FAILED: " + problem}};
+  if (r.initial.inserted_parents.rows() > 0)
+    wo.metadata[kInsertedVerticesKey] = inserted_vertices_text(r.initial.inserted_parents, r.initial.inserted_weight);
   write_flat(a.out, r.UV * scale, r.F, wo,
              "mm: the flat square's area equals the cortical area (" + std::to_string(r.surface_area) + " mm^2)");
   if (!a.uv.empty()) write_flat(a.uv, r.UV, r.F, wo, "unit square [0,1]^2 (x right, y up)");

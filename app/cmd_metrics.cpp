@@ -64,18 +64,24 @@ void run(const MetricsArgs& a) {
   if (map.mesh.num_vertices() < nv)
     throw InputError(a.map + ": has " + std::to_string(map.mesh.num_vertices()) + " vertices, fewer than the " +
                      std::to_string(nv) + " of " + a.surface + "; give a map on the surface's vertex indexing");
-  // The map's own triangles (e.g. a cortex patch); faces on vertices the map inserted (corner and
-  // ear splits, beyond the surface's vertices) have no 3D position here and are left out, as
-  // evalmap.py does.
+  // The map's own triangles (e.g. a cortex patch). Vertices the map inserted (corner and ear
+  // splits, beyond the surface's vertices) are placed on the surface from the map's
+  // authalic_inserted_vertices metadata (flatten writes it), so every face counts, as in flatten's
+  // own metrics; without it their faces have no 3D position and are left out (evalmap.py's drop).
   const MatrixXi& Fm = map.mesh.F.rows() > 0 ? map.mesh.F : surface.mesh.F;
+  const int inserted = map.mesh.num_vertices() - nv;
+  const auto placed = map.metadata.find(kInsertedVerticesKey);
+  const bool place = inserted > 0 && placed != map.metadata.end();
+  const MatrixXd V3 = place ? place_inserted_vertices(surface.mesh.V, placed->second, inserted, a.map) : surface.mesh.V;
+  const int known = static_cast<int>(V3.rows());
   std::vector<int> keep;
   for (Eigen::Index f = 0; f < Fm.rows(); ++f)
-    if (Fm(f, 0) < nv && Fm(f, 1) < nv && Fm(f, 2) < nv) keep.push_back(static_cast<int>(f));
+    if (Fm(f, 0) < known && Fm(f, 1) < known && Fm(f, 2) < known) keep.push_back(static_cast<int>(f));
   const int excluded = static_cast<int>(Fm.rows()) - static_cast<int>(keep.size());
   if (keep.empty()) throw InputError(a.map + ": no triangle of the map lies on the surface's vertices; check the file pair");
   MatrixXi F(static_cast<Eigen::Index>(keep.size()), 3);
   for (size_t k = 0; k < keep.size(); ++k) F.row(k) = Fm.row(keep[k]);
-  MatrixXd U = map.mesh.V.topRows(nv);
+  MatrixXd U = map.mesh.V.topRows(known);
   check_map_shape(a.map, U, F, domain);
 
   // Planar maps written in mm (e.g. flatten's OUT) are brought to their domain by one uniform
@@ -84,11 +90,11 @@ void run(const MetricsArgs& a) {
   bool rescaled = false;
   if (domain != MapDomain::Sphere) {
     const double W = domain == MapDomain::Rectangle ? 2.0 : 1.0;
-    std::vector<char> used(nv, 0);
+    std::vector<char> used(known, 0);
     for (Eigen::Index f = 0; f < F.rows(); ++f)
       for (int c = 0; c < 3; ++c) used[F(f, c)] = 1;
     double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
-    for (int v = 0; v < nv; ++v)
+    for (int v = 0; v < known; ++v)
       if (used[v]) x0 = std::min(x0, U(v, 0)), x1 = std::max(x1, U(v, 0)), y0 = std::min(y0, U(v, 1)), y1 = std::max(y1, U(v, 1));
     const double tol = 1e-6;
     if (x0 < -tol || y0 < -tol || x1 > W + tol || y1 > 1 + tol || (x1 - x0) < 0.5 * W || (y1 - y0) < 0.5) {
@@ -98,11 +104,12 @@ void run(const MetricsArgs& a) {
       rescaled = true;
     }
   }
-  const MapMetrics m = map_metrics(surface.mesh.V, U, F, domain, a.k);
+  const MapMetrics m = map_metrics(V3, U, F, domain, a.k);
   nlohmann::json j = metrics_json(m);
   j["surface"] = a.surface;
   j["map"] = a.map;
-  j["faces_on_inserted_vertices"] = excluded;
+  j["faces_on_inserted_vertices"] = excluded;  // left out
+  j["inserted_vertices_placed"] = place ? inserted : 0;
   j["rescaled_to_domain"] = rescaled;
   j["mirrored"] = m.mirrored;
   if (global_options().json) {

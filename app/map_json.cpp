@@ -1,8 +1,12 @@
 // JSON helpers for the map subcommands (see map_json.h).
 #include "app/map_json.h"
 
+#include <cmath>
+#include <cstdio>
 #include <map>
+#include <sstream>
 
+#include "core/error.h"
 #include "io/atomic_file.h"
 
 namespace authalic::app {
@@ -52,6 +56,42 @@ bool is_left_hemisphere(const std::map<std::string, std::string>& metadata, cons
     if (it->second.find("Right") != std::string::npos) return false;
   }
   return V.rows() == 0 || V.col(0).mean() <= 0.0;
+}
+
+std::string inserted_vertices_text(const MatrixXi& parents, const VectorXd& weight) {
+  std::string text;
+  char buf[64];
+  for (Eigen::Index k = 0; k < parents.rows(); ++k) {
+    std::snprintf(buf, sizeof(buf), "%s%d %d %.17g", k ? ";" : "", parents(k, 0), parents(k, 1), weight(k));
+    text += buf;
+  }
+  return text;
+}
+
+MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int count, const std::string& path) {
+  MatrixXd out(V.rows() + count, 3);
+  out.topRows(V.rows()) = V;
+  std::istringstream in(text);
+  std::string item;
+  int k = 0;
+  while (std::getline(in, item, ';')) {
+    std::istringstream fields(item);
+    long long p0 = -1, p1 = -1;
+    double w = NAN;
+    std::string rest;
+    const Eigen::Index self = V.rows() + k;
+    if (!(fields >> p0 >> p1 >> w) || (fields >> rest) || k >= count || p0 < 0 || p1 < 0 || p0 >= self || p1 >= self ||
+        !(w >= 0 && w <= 1))
+      throw InputError(path + ": metadata " + kInsertedVerticesKey + " entry " + std::to_string(k + 1) + " ('" + item +
+                       "') is not 'parent parent weight' for inserted vertex " + std::to_string(self) +
+                       "; the file was changed after authalic wrote it");
+    out.row(self) = (1 - w) * out.row(p0) + w * out.row(p1);
+    ++k;
+  }
+  if (k != count)
+    throw InputError(path + ": metadata " + kInsertedVerticesKey + " describes " + std::to_string(k) + " inserted vertices but the map has " +
+                     std::to_string(count) + "; the file was changed after authalic wrote it");
+  return out;
 }
 
 }  // namespace authalic::app

@@ -26,4 +26,15 @@ void write_json_file(const std::string& path, const nlohmann::json& j);
 // present, else from the side of the midline (x < 0 in RAS) the surface's centroid lies on.
 bool is_left_hemisphere(const std::map<std::string, std::string>& metadata, const MatrixXd& V);
 
+// The vertices a map inserted (corner and ear splits, core/conformal_map.h), as the text of the
+// map file's metadata key "authalic_inserted_vertices": "p0 p1 w;..." in order, vertex
+// nv + k at (1 - w) p0 + w p1 on the surface. `metrics` reads it to place them in 3D, so that it
+// measures every face of the map, as flatten does.
+inline constexpr const char* kInsertedVerticesKey = "authalic_inserted_vertices";
+std::string inserted_vertices_text(const MatrixXi& parents, const VectorXd& weight);
+// The surface positions V (num_input rows) extended by the inserted vertices described by
+// `text`; `count` of them are expected. Throws InputError naming `path` for text that does not
+// describe them (wrong count, a parent not yet defined, a weight outside [0, 1]).
+MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int count, const std::string& path);
+
 }  // namespace authalic::app

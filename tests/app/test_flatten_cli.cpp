@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 
 #include "common/test_data.h"
@@ -90,6 +91,28 @@ TEST(FlattenCli, B1MeetsTheRequirementsAndKeepsTheInputsVertices) {
   }
   EXPECT_GT(flagged, 100u);
   EXPECT_EQ(mismatched, 0u);
+
+  // Issue 15 item 2: `metrics` on flatten's own outputs reports flatten's numbers: the inserted
+  // split vertices are placed on the surface from the map's metadata, so no face is left out.
+  for (const std::string& map : {uv, out}) {
+    ASSERT_EQ(run_command(authalic_binary() + " metrics " + white + " " + map + " --json -q > " + dir + "/again.json", &output), 0) << output;
+    const auto again = read_json(dir + "/again.json");
+    EXPECT_EQ(again.at("faces_on_inserted_vertices"), 0) << map;
+    EXPECT_EQ(again.at("inserted_vertices_placed"), splits) << map;
+    EXPECT_EQ(again.at("faces"), mm.at("faces")) << map;
+    EXPECT_NEAR(again.at("element_cv").get<double>(), mm.at("element_cv").get<double>(), 1e-6) << map;
+    EXPECT_NEAR(again.at("face_ln_area_abs").at("mean").get<double>(), mm.at("face_ln_area_abs").at("mean").get<double>(), 1e-6) << map;
+  }
+  // Metadata that no longer describes the inserted vertices is refused, naming the file.
+  std::ifstream uv_in(uv, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(uv_in)), std::istreambuf_iterator<char>());
+  const std::size_t at = text.find("authalic_inserted_vertices");
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t value = text.find("<![CDATA[", at + 30) + 9;
+  text.insert(value, "99999999");  // the first parent becomes a vertex beyond the map
+  std::ofstream(dir + "/tampered.surf.gii", std::ios::binary) << text;
+  EXPECT_EQ(run_command(authalic_binary() + " metrics " + white + " " + dir + "/tampered.surf.gii -q", &output), 2) << output;
+  EXPECT_NE(output.find("tampered.surf.gii: metadata authalic_inserted_vertices entry 1"), std::string::npos) << output;
 }
 
 TEST(MetricsCli, AgreesWithTheIndependentEvalmap) {
@@ -107,11 +130,12 @@ TEST(MetricsCli, AgreesWithTheIndependentEvalmap) {
   for (const std::string map : {"uv", "init"}) {
     const std::string path = dir + "/" + map + ".surf.gii";
     ASSERT_EQ(run_command(authalic_binary() + " metrics " + white + " " + path + " --json > " + dir + "/a.json"), 0);
-    ASSERT_EQ(run_command("/usr/bin/python3 " + evalmap + " " + white + " " + path + " --domain square --k 32 --json > " + dir +
+    ASSERT_EQ(run_command("/usr/bin/python3 " + evalmap + " " + white + " " + path + " --domain square --k 32 --inserted auto --json > " + dir +
                           "/e.json"),
               0);
     const auto a = read_json(dir + "/a.json"), e = read_json(dir + "/e.json");
-    // Same faces (both skip the faces on inserted vertices), same definitions.
+    // Same faces (both place the vertices the map inserted: we from the map's metadata, evalmap
+    // by reconstructing the splits), same definitions.
     EXPECT_EQ(a.at("faces"), e.at("faces")) << map;
     EXPECT_EQ(a.at("flips"), e.at("flips")) << map;
     EXPECT_NEAR(a.at("face_ln_area_abs").at("mean").get<double>(), e.at("ln_area_ratio_abs_mean").get<double>(), 1e-6) << map;
