@@ -13,6 +13,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "analysis/cortex_region.h"
 #include "analysis/elements.h"
@@ -150,14 +151,17 @@ std::string load_hemisphere(Hemisphere& h, const std::string& white, const std::
   return region.note;
 }
 
-// A surface in scanner RAS (mm), the PET's world: FreeSurfer's tkregister coordinates moved by
-// c_ras (io::Surface::to_scanner), so Workbench shows it over the PET and the T1 without a transform.
-TriMesh in_scanner_ras(const io::Surface& s) {
-  TriMesh m = s.mesh;
-  const Eigen::Matrix3d A = s.to_scanner.topLeftCorner<3, 3>();
-  const Eigen::Vector3d t = s.to_scanner.topRightCorner<3, 1>();
-  m.V = (m.V * A.transpose()).rowwise() + t.transpose();
-  return m;
+// Writes `s` as GIFTI at `path` in scanner RAS (mm), the PET's world: FreeSurfer's tkregister
+// coordinates moved by c_ras (io::Surface::to_scanner), so Workbench shows it over the PET and the
+// T1 without a transform. `kind` is "white" or "pial".
+void write_anatomical_surface(const std::string& path, const io::Surface& s, const std::string& structure, const std::string& kind) {
+  io::SurfaceWriteOptions o;
+  o.anatomical_structure = structure;
+  o.geometric_type = "Anatomical";
+  o.space = "NIFTI_XFORM_SCANNER_ANAT";
+  o.metadata = {{"AnatomicalStructureSecondary", kind == "white" ? "GrayWhite" : "Pial"},
+                {"units", "mm"}, {"space", "scanner RAS (mm), the PET's world coordinates"}};
+  io::write_surface(path, TriMesh{transform_points(s.to_scanner, s.mesh.V), s.mesh.F}, o);
 }
 
 }  // namespace
@@ -529,25 +533,18 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     wo.geometric_type = "Flat";
     wo.metadata = {{"units", "mm"}, {"space", "authalic square map scaled to cortical area (mm^2 flat = mm^2 cortex)"}};
     // The subject's own surfaces, which every per-vertex file below pairs with (Workbench spec).
-    for (const auto& [surface, kind] : {std::pair<const io::Surface*, const char*>{&h.white, "white"}, {&h.pial, "pial"}}) {
-      io::SurfaceWriteOptions anatomical;
-      anatomical.anatomical_structure = wo.anatomical_structure;
-      anatomical.geometric_type = "Anatomical";
-      anatomical.space = "NIFTI_XFORM_SCANNER_ANAT";
-      anatomical.metadata = {{"AnatomicalStructureSecondary", std::string(kind) == "white" ? "GrayWhite" : "Pial"},
-                     {"units", "mm"}, {"space", "scanner RAS (mm), the PET's world coordinates"}};
+    for (const auto& [surface, kind, source] : {std::tuple<const io::Surface*, std::string, std::string>{&h.white, "white", h.left ? in.lh_white : in.rh_white},
+                                                 {&h.pial, "pial", h.left ? in.lh_pial : in.rh_pial}}) {
       const std::string name = hp + "_" + kind + ".surf.gii";
-      io::write_surface((stage / name).string(), in_scanner_ras(*surface), anatomical);
-      sidecar(name, {{"description", std::string("the subject's ") + kind + " surface in scanner RAS (mm), as read from " +
-                                         (std::string(kind) == "white" ? (h.left ? in.lh_white : in.rh_white) : (h.left ? in.lh_pial : in.rh_pial))}});
+      write_anatomical_surface((stage / name).string(), *surface, wo.anatomical_structure, kind);
+      sidecar(name, {{"description", "the subject's " + kind + " surface in scanner RAS (mm), as read from " + source}});
       spec.push_back({wo.anatomical_structure, "SURFACE", name});
     }
     const std::string flat_name = hp + "_space-authalic_flat.surf.gii";
     io::write_surface((stage / flat_name).string(), flat, wo);
     // Per-vertex files show on the flat map in Workbench when it has the surface's vertices (the map
     // inserts vertices only where a triangle has all three corners on the boundary).
-    const bool flat_pairs = flat.num_vertices() == h.white.mesh.num_vertices();
-    if (flat_pairs) spec.push_back({wo.anatomical_structure, "SURFACE", flat_name});
+    if (flat.num_vertices() == h.white.mesh.num_vertices()) spec.push_back({wo.anatomical_structure, "SURFACE", flat_name});
     sidecar(flat_name, {{"description", "authalic flat map; square side sqrt(cortical area) mm"},
                         {"metrics", {{"flips", h.metrics.flips}, {"element_area_cv", h.metrics.element_cv}}}});
     if (options.rectangle) {

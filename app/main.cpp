@@ -131,7 +131,7 @@ static void show_defaults(CLI::App& command) {
     if (o->get_type_size() == 0) continue;  // a flag
     o->capture_default_str();
     const std::string value = o->get_default_str();
-    if (value == "[]" || value == "nan" || value == "-1" || !is_valid_value(*o, value)) o->default_str("");
+    if (value == "[]" || !is_valid_value(*o, value)) o->default_str("");
   }
   for (CLI::App* sub : command.get_subcommands([](CLI::App*) { return true; })) show_defaults(*sub);
 }
