@@ -9,6 +9,7 @@
 #include <vtkNew.h>
 #include <vtkOBJReader.h>
 #include <vtkOBJWriter.h>
+#include <vtkLogger.h>
 #include <vtkOutputWindow.h>
 #include <vtkPLYReader.h>
 #include <vtkPLYWriter.h>
@@ -95,6 +96,9 @@ struct ErrorCollector {
 void silence_vtk_output() {
   static std::once_flag once;
   std::call_once(once, [] {
+    // VTK 9 also logs every error through vtkLogger, whose stderr sink prints it with a
+    // timestamp whatever the output window does (an empty .vtp printed 12 lines before ours).
+    vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
     vtkOutputWindow* window = vtkOutputWindow::GetInstance();
     window->SetDisplayModeToNever();
     vtkNew<vtkCallbackCommand> relay;

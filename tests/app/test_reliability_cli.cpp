@@ -618,6 +618,22 @@ TEST(ReliabilityCli, CohortOptionalSexAndT1Columns) {
   EXPECT_NE(out.find("sex 'q' is not F, M or O"), std::string::npos) << out;
 }
 
+// VTK 9 logs its readers' errors through vtkLogger, which printed a dozen timestamped lines to
+// stderr before our one line (an empty .vtp reached VTK's XML parser). Every empty VTK-family
+// file now gives exactly one line, exit 2, and no output.
+TEST(ReliabilityCli, EmptyVtkFamilyFilesGiveOneLine) {
+  const std::string dir = test::temp_dir("rel-empty-vtk");
+  for (const char* ext : {"vtp", "vtk", "ply", "obj", "stl"}) {
+    const std::string in = dir + "/empty." + ext;
+    std::ofstream{in};
+    std::string out;
+    EXPECT_EQ(test::run_command(bin() + " flatten " + q(in) + " " + q(dir + "/o.surf.gii"), &out), 2) << ext << ": " << out;
+    EXPECT_EQ(lines_of(out), 1) << ext << ": " << out;
+    EXPECT_NE(out.find(in + ": "), std::string::npos) << out;
+    EXPECT_FALSE(fs::exists(dir + "/o.surf.gii")) << ext;
+  }
+}
+
 // Running (a zombie, reparented to an init that does not reap, counts as ended).
 bool process_alive(pid_t pid) {
   std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
