@@ -37,6 +37,7 @@ struct FlattenArgs {
   int fixed_steps = 0;
   int iterations = 200;
   bool no_polish = false;
+  bool split_dividing_edges = false;
   bool keep_failed = false;
   std::string start = "stretch";
   double max_memory = -1;  // GB; < 0: 75% of the physical RAM
@@ -184,6 +185,7 @@ void run(const FlattenArgs& a) {
   options.flow.fixed_steps = a.fixed_steps;
   options.flow.max_iterations = a.iterations;
   options.flow.polish = !a.no_polish;
+  options.flip_dividing_edges = !a.split_dividing_edges;
   options.stretch_start = a.start == "stretch";
   if (!a.density.empty()) options.density = io::read_per_vertex(a.density, mesh.num_vertices());
 
@@ -271,6 +273,7 @@ void run(const FlattenArgs& a) {
                         {"corner_vertices_inserted", r.initial.corner_vertices_inserted},
                         {"corners_snapped", r.initial.corners_snapped},
                         {"edges_split", r.initial.edges_split},
+                        {"edges_flipped", r.initial.edges_flipped},
                         {"flips", count_flipped(r.UV_initial, r.F)}}},
                       {"flow", flow_json(r.flow, options.flow)},
                       {"flips", r.flips},
@@ -381,6 +384,10 @@ void setup(CLI::App& parent) {
                   "Mesh method with Zou's fixed schedule of K steps (eq. 19) instead of adaptive steps")
       ->check(in_range(0, 100000));
   sub->add_flag("--no-polish", a->no_polish, "Skip the final per-face Gauss-Newton polish (grid method)");
+  sub->add_flag("--split-dividing-edges", a->split_dividing_edges,
+                "Split every interior edge whose ends land on one side of the square at its midpoint (Zou et al. 2011, "
+                "section 4.1) instead of flipping it; the maps then have appended vertices, recorded as "
+                "authalic_inserted_vertices metadata, and do not pair with the surface's per-vertex files");
   add_max_memory_option(*sub, &a->max_memory);
   sub->add_option("--max-vertices", a->max_vertices,
                   "Largest region (vertices) accepted; the map is validated up to 150k (fsaverage5 subdivided twice)")

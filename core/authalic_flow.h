@@ -62,7 +62,7 @@ struct FlowOptions {
 
   // Mesh method (and polish).
   int max_iterations = 200;      // mesh steps (Mesh method); polish uses polish_iterations
-  int polish_iterations = 16;    // at most; it stops when a step removes less than 1 % of the per-face error
+  int polish_iterations = 16;    // at most; it stops at a step removing < 1 % of the per-face error (two in a row while not converged)
   double polish_band = 0.05;     // polish corrects faces whose |ln area ratio| exceeds this band
   double polish_far_band = 0.5;  // then (up to polish_iterations) local steps about the faces still beyond this
   int polish_cg_iterations = 50; // conjugate-gradient iterations per polish step (inexact Newton)

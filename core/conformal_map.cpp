@@ -44,6 +44,75 @@ Eigen::Vector3d row3(const MatrixXd& V, int i) { return V.row(i).head<3>().trans
 
 using Face = std::array<int, 3>;
 
+// Dividing edges resolved by edge flips, which keep the vertex list (splitting them appends vertices
+// that the surface's per-vertex data does not have, so the flat map would not pair with it).
+// A dividing edge (a, c) -- interior, its endpoints on one side -- between faces (a, c, x) and
+// (c, a, y) becomes (x, y) when x and y share no side, x-y is not yet an edge, and both new
+// triangles have a 3D area. A convex quad gives a triangulation of the same surface piece; a
+// non-convex one (real meshes have a few) gives two triangles whose 3D areas sum to a little more
+// than the pair's: the map is authalic for the faces it returns, which is what its checks measure.
+// Faces touched by a flip wait for the next round; whatever is left is split by stage 2. F and
+// origin (face -> input face) are updated in place.
+double tri_area(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
+  return 0.5 * (q - p).cross(r - p).norm();
+}
+// A flipped pair's triangles each keep at least this share of the pair's 3D area: a flat one would
+// have to map to a sliver.
+constexpr double kMinFlipAreaShare = 1e-3;
+
+int flip_dividing_edges(const std::vector<Eigen::Vector3d>& pos, const std::vector<int>& mask, MatrixXi& F,
+                        std::vector<int>& origin) {
+  const int n = static_cast<int>(pos.size());
+  int flipped = 0;
+  for (int round = 0; round < 4; ++round) {
+    const EdgeTopology topo = edge_topology(F, n);
+    std::vector<std::vector<int>> adj(n);
+    for (Eigen::Index e = 0; e < topo.E.rows(); ++e) {
+      adj[topo.E(e, 0)].push_back(topo.E(e, 1));
+      adj[topo.E(e, 1)].push_back(topo.E(e, 0));
+    }
+    std::vector<std::pair<int, int>> added;
+    auto is_edge = [&](int p, int q) {
+      if (std::find(adj[p].begin(), adj[p].end(), q) != adj[p].end()) return true;
+      return std::find(added.begin(), added.end(), std::pair<int, int>(std::minmax(p, q))) != added.end();
+    };
+    std::vector<char> touched(F.rows(), 0);
+    int this_round = 0;
+    for (Eigen::Index e = 0; e < topo.E.rows(); ++e) {
+      const int a0 = topo.E(e, 0), c0 = topo.E(e, 1);
+      if (topo.edge_faces[e].size() != 2 || (mask[a0] & mask[c0]) == 0) continue;
+      int f1 = topo.edge_faces[e][0], f2 = topo.edge_faces[e][1];
+      if (touched[f1] || touched[f2]) continue;
+      // Orient: f1 holds the half-edge a -> c, f2 the half-edge c -> a; x, y their third vertices.
+      int a = a0, c = c0, x = -1, y = -1;
+      for (int k = 0; k < 3; ++k)
+        if (F(f1, k) == a0 && F(f1, (k + 1) % 3) == c0) x = F(f1, (k + 2) % 3);
+      if (x < 0) {
+        std::swap(f1, f2);
+        for (int k = 0; k < 3; ++k)
+          if (F(f1, k) == a0 && F(f1, (k + 1) % 3) == c0) x = F(f1, (k + 2) % 3);
+      }
+      for (int k = 0; k < 3; ++k)
+        if (F(f2, k) == c && F(f2, (k + 1) % 3) == a) y = F(f2, (k + 2) % 3);
+      if (x < 0 || y < 0 || x == y || (mask[x] & mask[y]) != 0 || is_edge(x, y)) continue;
+      // In the plane map x lies on the side between a and c and y inside, so both new triangles are
+      // positively oriented there whatever the quad's 3D shape; they only need a 3D area to map.
+      const double before = tri_area(pos[a], pos[c], pos[x]) + tri_area(pos[c], pos[a], pos[y]);
+      const double min_new = kMinFlipAreaShare * before;
+      if (!(tri_area(pos[x], pos[a], pos[y]) > min_new && tri_area(pos[y], pos[c], pos[x]) > min_new)) continue;
+      F.row(f1) << x, a, y;
+      F.row(f2) << y, c, x;
+      origin[f2] = origin[f1];  // the pair now covers the union of both input faces
+      touched[f1] = touched[f2] = 1;
+      added.push_back(std::minmax(x, y));
+      ++this_round;
+    }
+    flipped += this_round;
+    if (this_round == 0) break;
+  }
+  return flipped;
+}
+
 }  // namespace
 
 std::string to_string(HarmonicWeights w) {
@@ -382,12 +451,14 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
       }
   }
 
-  // Stage 2 (ear splits): interior edges whose endpoints share a side.
-  const EdgeTopology topo1 = edge_topology(F1, n1);
-  std::vector<int> mid(topo1.E.rows(), -1);
   std::vector<Eigen::Vector3d> all_pos(n1);
   for (int v = 0; v < nv; ++v) all_pos[v] = row3(V, v);
   for (size_t k = 0; k < extra.size(); ++k) all_pos[nv + k] = extra[k];
+  if (opt.flip_dividing_edges) R.edges_flipped = flip_dividing_edges(all_pos, mask, F1, origin1);
+
+  // Stage 2 (ear splits): interior edges whose endpoints share a side.
+  const EdgeTopology topo1 = edge_topology(F1, n1);
+  std::vector<int> mid(topo1.E.rows(), -1);
   for (Eigen::Index e = 0; e < topo1.E.rows(); ++e) {
     const int a = topo1.E(e, 0), b = topo1.E(e, 1);
     if (topo1.edge_faces[e].size() == 2 && (mask[a] & mask[b]) != 0) {

@@ -13,8 +13,11 @@
 // 3. Ear splits (section 4.1, generalised): every interior edge whose two endpoints lie on the
 //    same side would be flattened onto that side (a "dividing edge" in Floater's sense: a triangle
 //    with all three vertices on one side, or a chord cutting off a collapsed part). Each such edge
-//    is split at its 3D midpoint, which becomes an interior vertex; triangles with 1, 2 or 3 split
-//    edges become 2, 3 or 4 triangles. No triangle of the result has three collinear vertices.
+//    is flipped to the other diagonal of its quad when that quad is convex and the new edge is not
+//    dividing (the vertex list stays the input's, so per-vertex data of the surface pairs with the
+//    map); the rest are split at their 3D midpoint, which becomes an interior vertex; triangles
+//    with 1, 2 or 3 split edges become 2, 3 or 4 triangles. No triangle of the result has three
+//    collinear vertices.
 // 4. Interior: the harmonic map with this Dirichlet boundary. With the whole boundary fixed, the
 //    least-squares conformal map (Lévy et al. 2002, seed 000 ref. [24]) has the same minimiser as
 //    the cotangent-weighted harmonic map (its area term depends on the boundary only), so the
@@ -72,6 +75,9 @@ struct RectangleBoundaryMap {
   // false: skip the cotangent map and solve with `fallback` directly (a caller that knows the
   // cotangent map would fold, or re-solves anyway: native meshes always have obtuse triangles).
   bool try_cotangent = true;
+  // Resolve dividing edges (step 3) by edge flips where the quad allows it, so the map keeps the
+  // input's vertex list; only the rest are split. false: split every one (Zou et al. 2011).
+  bool flip_dividing_edges = true;
 };
 
 struct ConformalMapResult {
@@ -90,6 +96,7 @@ struct ConformalMapResult {
   int corner_vertices_inserted = 0;  // vertices inserted on corners (corner splits)
   int corners_snapped = 0;           // corners taken by an existing boundary vertex moved onto it
   int edges_split = 0;               // interior edges split at their midpoint (ear splits)
+  int edges_flipped = 0;             // dividing edges flipped instead (same vertices, two faces changed)
   HarmonicWeights weights = HarmonicWeights::Cotangent;  // the weights of the returned map
   bool sliding = false;     // the returned map is the sliding-boundary LSCM (else arc length)
   int cotangent_flips = 0;  // flipped/degenerate triangles of the cotangent map (0 unless it fell back)

@@ -140,6 +140,7 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   RectangleBoundaryMap b;
   b.width = opt.width;
   b.sliding_boundary = opt.sliding_initial_boundary;
+  b.flip_dividing_edges = opt.flip_dividing_edges;
   if (opt.stretch_start) b.fallback = HarmonicWeights::ClampedCotangent;
   b.try_cotangent = !opt.stretch_start || opt.cotangent_start;
   if (opt.anatomical_anchor) {

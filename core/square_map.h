@@ -44,6 +44,9 @@ struct SquareMapOptions {
   // factorisation less; on a native mesh the cotangent map always folds, fs741: 319 triangles).
   bool cotangent_start = true;
   StretchEnergyOptions stretch;
+  // See RectangleBoundaryMap::flip_dividing_edges: true keeps the input's vertex list when every
+  // dividing edge can be flipped (all fsaverage5 and fs741 regions measured); false splits them all.
+  bool flip_dividing_edges = true;
 };
 
 struct SquareMapResult {

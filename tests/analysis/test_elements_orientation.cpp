@@ -29,6 +29,7 @@ TEST(ElementMapOrientation, MirroredHemisphereTracesItsInsertedVertices) {
   right.V.col(0) *= -1.0;
   SquareMapOptions o;
   o.flow.grid_resolution = 128;
+  o.flip_dividing_edges = false;  // splits, so there are inserted vertices to trace
   const SquareMapResult l = square_map(left.V, left.F, o), r = square_map(right.V, right.F, o);
   ASSERT_NE(l.faces_reversed, r.faces_reversed);
   ASSERT_GT(r.V.rows(), right.V.rows()) << "the fixture should make the flattening insert vertices";
@@ -50,7 +51,9 @@ TEST(ElementMapOrientation, MirroredFsaverage5LeftHemisphereAsARightOne) {
   TriMesh right = io::read_surface(white).mesh;
   right.V.col(0) *= -1.0;
   const MatrixXi F = io::read_surface(flat).mesh.F;
-  const SquareMapResult r = square_map(right.V, F, SquareMapOptions{});
+  SquareMapOptions o;
+  o.flip_dividing_edges = false;  // splits, so there are inserted vertices to trace
+  const SquareMapResult r = square_map(right.V, F, o);
   ASSERT_TRUE(r.faces_reversed);
   ASSERT_GT(r.V.rows(), right.V.rows());
   const VectorXd values = VectorXd::Ones(right.V.rows());

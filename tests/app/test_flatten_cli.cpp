@@ -54,16 +54,33 @@ TEST(FlattenCli, B1MeetsTheRequirementsAndKeepsTheInputsVertices) {
   EXPECT_LE(mm.at("face_ln_area_abs").at("mean").get<double>(), 0.06);
   EXPECT_GT(j.at("initial_metrics").at("element_cv").get<double>(), 0.3);  // the conformal start is not
 
-  // Layout: the input's 10,242 vertices first, in order, then the inserted ones; the region's faces.
+  // Layout (issue 15 item 1): exactly the input's 10,242 vertices, in order; the region's 18,654
+  // faces, with the few dividing edges flipped (not split), so per-vertex files pair with the map.
   const authalic::io::Surface in = authalic::io::read_surface(white);
   const authalic::io::Surface o = authalic::io::read_surface(out), u = authalic::io::read_surface(uv);
-  ASSERT_GE(o.mesh.num_vertices(), in.mesh.num_vertices());
-  EXPECT_EQ(o.mesh.num_vertices(), j.at("vertices").get<int>());
+  EXPECT_EQ(o.mesh.num_vertices(), in.mesh.num_vertices());
+  EXPECT_EQ(u.mesh.num_vertices(), in.mesh.num_vertices());
+  EXPECT_EQ(j.at("vertices"), in.mesh.num_vertices());
   EXPECT_EQ(j.at("input_vertices"), in.mesh.num_vertices());
-  const int splits = j.at("initial_map").at("edges_split").get<int>() + j.at("initial_map").at("corner_vertices_inserted").get<int>();
-  EXPECT_EQ(o.mesh.num_vertices(), in.mesh.num_vertices() + splits);
-  EXPECT_GE(o.mesh.num_faces(), 18654);  // flat_left's faces, split ones replaced by their pieces
-  EXPECT_LE(o.mesh.num_faces(), 18654 + 3 * splits);
+  EXPECT_EQ(j.at("initial_map").at("edges_split"), 0);
+  EXPECT_EQ(j.at("initial_map").at("corner_vertices_inserted"), 0);
+  EXPECT_GE(j.at("initial_map").at("edges_flipped").get<int>(), 1);  // fsaverage5's cortex has 5 ears
+  EXPECT_EQ(o.mesh.num_faces(), 18654);
+  // Workbench pairs FreeSurfer's thickness of this subject with the flat map (it refused the map
+  // with 10,247 vertices: "metric does not match surface in number of vertices").
+  AUTHALIC_REQUIRE_SHARED(thick, "fsaverage5/thick_left.gii.gz");
+  if (run_command("command -v wb_command > /dev/null 2>&1") == 0) {
+    ASSERT_EQ(run_command("/usr/bin/python3 -c \"import nibabel as nib; nib.save(nib.load('" + thick + "'), '" + dir +
+                              "/thick.func.gii')\"",
+                          &output),
+              0)
+        << output;
+    EXPECT_EQ(run_command("wb_command -metric-smoothing " + out + " " + dir + "/thick.func.gii 2 " + dir + "/smooth.func.gii", &output), 0)
+        << output;
+  } else if (authalic::test::running_in_ci()) {
+    FAIL() << "CI=true but wb_command (connectome-workbench) is missing";
+  }
+  ASSERT_EQ(run_command(authalic_binary() + " render " + dir + "/thick.png " + uv + " --values " + thick + " -q", &output), 0) << output;
   // uv in the unit square; the flat surface in mm with the cortex's area.
   EXPECT_GE(u.mesh.V.leftCols(2).minCoeff(), 0.0);
   EXPECT_LE(u.mesh.V.leftCols(2).maxCoeff(), 1.0);
@@ -92,19 +109,38 @@ TEST(FlattenCli, B1MeetsTheRequirementsAndKeepsTheInputsVertices) {
   EXPECT_GT(flagged, 100u);
   EXPECT_EQ(mismatched, 0u);
 
-  // Issue 15 item 2: `metrics` on flatten's own outputs reports flatten's numbers: the inserted
-  // split vertices are placed on the surface from the map's metadata, so no face is left out.
+  // `metrics` on flatten's own outputs reports flatten's numbers (issue 15 item 2).
   for (const std::string& map : {uv, out}) {
     ASSERT_EQ(run_command(authalic_binary() + " metrics " + white + " " + map + " --json -q > " + dir + "/again.json", &output), 0) << output;
     const auto again = read_json(dir + "/again.json");
     EXPECT_EQ(again.at("faces_on_inserted_vertices"), 0) << map;
-    EXPECT_EQ(again.at("inserted_vertices_placed"), splits) << map;
     EXPECT_EQ(again.at("faces"), mm.at("faces")) << map;
     EXPECT_NEAR(again.at("element_cv").get<double>(), mm.at("element_cv").get<double>(), 1e-6) << map;
     EXPECT_NEAR(again.at("face_ln_area_abs").at("mean").get<double>(), mm.at("face_ln_area_abs").at("mean").get<double>(), 1e-6) << map;
   }
+  // With --split-dividing-edges (Zou et al.'s splits) the map has appended vertices; metrics places
+  // them on the surface from the map's metadata, so no face is left out either.
+  const std::string split_uv = dir + "/lh.split.uv.surf.gii", split_m = dir + "/split.json";
+  ASSERT_EQ(run_command(authalic_binary() + " flatten " + white + " " + dir + "/lh.split.surf.gii --faces-from " + flat + " --uv " +
+                            split_uv + " --metrics " + split_m + " --split-dividing-edges -q",
+                        &output),
+            0)
+      << output;
+  const auto js = read_json(split_m);
+  const int splits = js.at("initial_map").at("edges_split").get<int>() + js.at("initial_map").at("corner_vertices_inserted").get<int>();
+  EXPECT_GE(splits, 1);
+  EXPECT_EQ(js.at("initial_map").at("edges_flipped"), 0);
+  EXPECT_EQ(authalic::io::read_surface(split_uv).mesh.num_vertices(), in.mesh.num_vertices() + splits);
+  ASSERT_EQ(run_command(authalic_binary() + " metrics " + white + " " + split_uv + " --json -q > " + dir + "/again.json", &output), 0) << output;
+  {
+    const auto again = read_json(dir + "/again.json");
+    EXPECT_EQ(again.at("faces_on_inserted_vertices"), 0);
+    EXPECT_EQ(again.at("inserted_vertices_placed"), splits);
+    EXPECT_EQ(again.at("faces"), js.at("metrics").at("faces"));
+    EXPECT_NEAR(again.at("element_cv").get<double>(), js.at("metrics").at("element_cv").get<double>(), 1e-6);
+  }
   // Metadata that no longer describes the inserted vertices is refused, naming the file.
-  std::ifstream uv_in(uv, std::ios::binary);
+  std::ifstream uv_in(split_uv, std::ios::binary);
   std::string text((std::istreambuf_iterator<char>(uv_in)), std::istreambuf_iterator<char>());
   const std::size_t at = text.find("authalic_inserted_vertices");
   ASSERT_NE(at, std::string::npos);

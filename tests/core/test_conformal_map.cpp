@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 
 #include "common/hard_meshes.h"
 #include "core/conformal_map.h"
@@ -59,11 +60,23 @@ void expect_valid_map(const ConformalMapResult& r, const TriMesh& input, const s
   for (int v : r.boundary)
     if (__builtin_popcount(r.side_mask[v]) == 2) ++corners;
   EXPECT_EQ(corners, 4) << what;
-  // Split pieces keep their parent face's 3D area (vertices inserted on the surface).
-  const VectorXd a_in = face_areas(input.V, input.F), a_out = face_areas(r.V, r.F);
-  VectorXd sum = VectorXd::Zero(input.F.rows());
-  for (Eigen::Index f = 0; f < r.F.rows(); ++f) sum[r.face_origin[f]] += a_out[f];
-  EXPECT_LT((sum - a_in).cwiseAbs().maxCoeff(), 1e-12 * a_in.sum()) << what;
+  if (r.edges_flipped == 0) {
+    // Split pieces keep their parent face's 3D area (vertices inserted on the surface).
+    const VectorXd a_in = face_areas(input.V, input.F), a_out = face_areas(r.V, r.F);
+    VectorXd sum = VectorXd::Zero(input.F.rows());
+    for (Eigen::Index f = 0; f < r.F.rows(); ++f) sum[r.face_origin[f]] += a_out[f];
+    EXPECT_LT((sum - a_in).cwiseAbs().maxCoeff(), 1e-12 * a_in.sum()) << what;
+  } else if (r.edges_split == 0 && r.corner_vertices_inserted == 0) {
+    // Flips only: the input's vertices and face count; exactly edges_flipped edges replaced.
+    EXPECT_EQ(r.V.rows(), input.V.rows()) << what;
+    EXPECT_EQ(r.F.rows(), input.F.rows()) << what;
+    const EdgeTopology before = edge_topology(input.F, input.num_vertices()), after = edge_topology(r.F, input.num_vertices());
+    std::set<std::pair<int, int>> old_edges;
+    for (Eigen::Index e = 0; e < before.E.rows(); ++e) old_edges.insert({before.E(e, 0), before.E(e, 1)});
+    int changed = 0;
+    for (Eigen::Index e = 0; e < after.E.rows(); ++e) changed += old_edges.count({after.E(e, 0), after.E(e, 1)}) == 0;
+    EXPECT_EQ(changed, r.edges_flipped) << what;
+  }
   // The input's vertices come first, unchanged.
   EXPECT_EQ(r.num_input_vertices, input.num_vertices());
   EXPECT_EQ((r.V.topRows(input.num_vertices()) - input.V).cwiseAbs().maxCoeff(), 0.0);
@@ -138,12 +151,19 @@ TEST(ConformalMap, EarAndStripTrianglesAreSplitWithoutDegenerateTriangles) {
     strip.F.row(2 * i + 1) << i, n + 2 + i, n + 1 + i;
   }
   RectangleBoundaryMap opt;
+  opt.flip_dividing_edges = false;
   const ConformalMapResult r = conformal_rectangle_map(strip.V, strip.F, opt);
   EXPECT_GE(r.edges_split, 2);  // the diagonals at the two corners the rows wrap around
   expect_valid_map(r, strip, "strip");
   EXPECT_GT(min_angle(r.UV, r.F), 1e-4);
   // Inserted midpoints are the 3D midpoints of the split edges: the surface is unchanged.
   EXPECT_NEAR(face_areas(r.V, r.F).sum(), face_areas(strip.V, strip.F).sum(), 1e-12);
+  // By default they are flipped instead: the strip keeps its vertices.
+  const ConformalMapResult d = conformal_rectangle_map(strip.V, strip.F, RectangleBoundaryMap{});
+  EXPECT_GE(d.edges_flipped, 2);
+  EXPECT_EQ(d.edges_split, 0);
+  EXPECT_EQ(d.V.rows(), strip.V.rows());
+  expect_valid_map(d, strip, "strip, default");
 }
 
 TEST(ConformalMap, EarOnTheGridBoundaryIsSplit) {
@@ -159,9 +179,59 @@ TEST(ConformalMap, EarOnTheGridBoundaryIsSplit) {
   m.F.row(m.F.rows() - 1) << 4, 3, nv;
   RectangleBoundaryMap opt;
   opt.anchor_vertex = 0;
+  opt.flip_dividing_edges = false;
   const ConformalMapResult r = conformal_rectangle_map(m.V, m.F, opt);
   EXPECT_GE(r.edges_split, 1);
   expect_valid_map(r, m, "ear");
+}
+
+TEST(ConformalMap, EarOnTheGridBoundaryIsFlippedKeepingTheInputsVertices) {
+  // The same ear, default options: its interior edge 3-4 becomes the edge from the ear's tip to the
+  // grid vertex above, so the map has the input's vertices (per-vertex files pair with it).
+  TriMesh m = test::square_grid(6);
+  const int nv = m.num_vertices();
+  m.V.conservativeResize(nv + 1, 3);
+  m.V.row(nv) << 0.5, -0.05, 0.0;
+  m.F.conservativeResize(m.F.rows() + 1, 3);
+  m.F.row(m.F.rows() - 1) << 4, 3, nv;
+  RectangleBoundaryMap opt;
+  opt.anchor_vertex = 0;
+  const ConformalMapResult r = conformal_rectangle_map(m.V, m.F, opt);
+  EXPECT_EQ(r.edges_flipped, 1);
+  EXPECT_EQ(r.edges_split, 0);
+  EXPECT_EQ(r.V.rows(), nv + 1);
+  const EdgeTopology t = edge_topology(r.F, nv + 1);
+  bool has_3_4 = false, has_tip_edge = false;
+  for (Eigen::Index e = 0; e < t.E.rows(); ++e) {
+    has_3_4 = has_3_4 || (t.E(e, 0) == 3 && t.E(e, 1) == 4);
+    has_tip_edge = has_tip_edge || (t.E(e, 1) == nv && t.edge_faces[e].size() == 2);
+  }
+  EXPECT_FALSE(has_3_4);
+  EXPECT_TRUE(has_tip_edge) << "the ear's tip now has an interior edge";
+  expect_valid_map(r, m, "flipped ear");
+}
+
+TEST(ConformalMap, EarWhoseFlipWouldBeFlatIn3dIsSplit) {
+  // The ear's tip straight below the grid vertex across its interior edge: one triangle of the
+  // flip would have three collinear 3D vertices (no area to map), so the edge is split instead.
+  TriMesh m = test::square_grid(6);
+  const int nv = m.num_vertices();
+  int across = -1;  // the third vertex of the grid face on the edge 3-4
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c)
+      if (m.F(f, c) == 3 && m.F(f, (c + 1) % 3) == 4) across = m.F(f, (c + 2) % 3);
+  ASSERT_GE(across, 0);
+  m.V.conservativeResize(nv + 1, 3);
+  m.V.row(nv) << m.V(across, 0), -0.05, 0.0;
+  m.F.conservativeResize(m.F.rows() + 1, 3);
+  m.F.row(m.F.rows() - 1) << 4, 3, nv;
+  RectangleBoundaryMap opt;
+  opt.anchor_vertex = 0;
+  const ConformalMapResult r = conformal_rectangle_map(m.V, m.F, opt);
+  EXPECT_EQ(r.edges_flipped, 0);
+  EXPECT_EQ(r.edges_split, 1);
+  EXPECT_EQ(r.V.rows(), nv + 2);
+  expect_valid_map(r, m, "ear with a flat flip");
 }
 
 TEST(ConformalMap, RectangleOfWidthTwo) {
