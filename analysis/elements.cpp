@@ -385,32 +385,53 @@ std::vector<double> block_areas(const ElementBlock& block) {
 
 // ---- files -------------------------------------------------------------------------------
 
-std::string element_sidecar_path(const std::string& csv_path) {
-  const std::string ext = ".csv";
-  if (csv_path.size() > ext.size() && csv_path.compare(csv_path.size() - ext.size(), ext.size(), ext) == 0)
-    return csv_path.substr(0, csv_path.size() - ext.size()) + ".json";
-  return csv_path + ".json";
+namespace {
+
+bool has_suffix(const std::string& path, const std::string& ext) {
+  return path.size() > ext.size() && path.compare(path.size() - ext.size(), ext.size(), ext) == 0;
+}
+
+// Tab for .tsv (what `run` writes, as BIDS tables are), comma for .csv (older tables, other tools).
+char element_table_delimiter(const std::string& path) { return has_suffix(path, ".tsv") ? '\t' : ','; }
+
+constexpr const char* kElementColumns[] = {"id", "row", "col", "area_mm2", "centroid_x_mm", "centroid_y_mm", "centroid_z_mm", "value",
+                                           "n_vertices"};
+
+// The header line: id, hemisphere, then the rest of kElementColumns, joined by `d`.
+std::string element_table_header(char d) {
+  std::string h = std::string("id") + d + "hemisphere";
+  for (std::size_t i = 1; i < std::size(kElementColumns); ++i) h += d + std::string(kElementColumns[i]);
+  return h;
+}
+
+}  // namespace
+
+std::string element_sidecar_path(const std::string& table_path) {
+  for (const std::string ext : {".tsv", ".csv"})
+    if (has_suffix(table_path, ext)) return table_path.substr(0, table_path.size() - ext.size()) + ".json";
+  return table_path + ".json";
 }
 
 void write_element_table(const std::string& csv_path, const ElementTable& table) {
-  std::string csv = "id,hemisphere,row,col,area_mm2,centroid_x_mm,centroid_y_mm,centroid_z_mm,value,n_vertices\n";
+  const char d = element_table_delimiter(csv_path);
+  std::string csv = element_table_header(d) + "\n";
   csv.reserve(static_cast<std::size_t>(table.num_values()) * 96 + csv.size());
   for (const auto& b : table.blocks) {
     if (static_cast<int>(b.elements.size()) != table.grid.num_elements())
       throw std::logic_error("write_element_table: block size does not match the grid");
     for (const auto& e : b.elements) {
       csv += std::to_string(e.id);
-      csv += ',';
+      csv += d;
       csv += b.hemisphere;
-      csv += ',';
+      csv += d;
       csv += std::to_string(e.row);
-      csv += ',';
+      csv += d;
       csv += std::to_string(e.col);
       for (double x : {e.area_mm2, e.centroid.x(), e.centroid.y(), e.centroid.z(), e.value}) {
-        csv += ',';
+        csv += d;
         append_number(csv, x);
       }
-      csv += ',';
+      csv += d;
       csv += std::to_string(e.n_vertices);
       csv += '\n';
     }
@@ -428,30 +449,40 @@ void write_element_table(const std::string& csv_path, const ElementTable& table)
   j["units"] = table.units;
   j["subject_id"] = table.subject_id;
   j["age"] = std::isfinite(table.age) ? nlohmann::json(table.age) : nlohmann::json(nullptr);
-  j["columns"] = {{"id", "row * cols + col"},
-                  {"row", "0 = bottom of the domain (y = 0; sphere: z = -1)"},
-                  {"col", "0 = left of the domain (x = 0; sphere: longitude -pi)"},
-                  {"area_mm2", "cortical area mapped into the element (mm^2)"},
-                  {"centroid_x_mm", "area-weighted centroid, scanner RAS (mm)"},
-                  {"value", "area-weighted mean value (" + (table.units.empty() ? std::string("input units") : table.units) + ")"},
-                  {"n_vertices", "surface vertices whose map point lies in the element"}};
+  // Each column described as a BIDS tabular-file sidecar does (Description, Units).
+  auto column = [](const std::string& description, const std::string& units) {
+    nlohmann::json c = {{"Description", description}};
+    if (!units.empty()) c["Units"] = units;
+    return c;
+  };
+  j["columns"] = {{"id", column("element id: row * cols + col", "")},
+                  {"hemisphere", column("hemisphere block (listed under \"hemispheres\")", "")},
+                  {"row", column("0 = bottom of the domain (y = 0; sphere: z = -1)", "")},
+                  {"col", column("0 = left of the domain (x = 0; sphere: longitude -pi)", "")},
+                  {"area_mm2", column("cortical area mapped into the element", "mm^2")},
+                  {"centroid_x_mm", column("area-weighted centroid x, scanner RAS", "mm")},
+                  {"centroid_y_mm", column("area-weighted centroid y, scanner RAS", "mm")},
+                  {"centroid_z_mm", column("area-weighted centroid z, scanner RAS", "mm")},
+                  {"value", column("area-weighted mean value", table.units.empty() ? std::string("input units") : table.units)},
+                  {"n_vertices", column("surface vertices whose map point lies in the element", "")}};
   j["metadata"] = table.metadata;
   io::write_file_atomically(element_sidecar_path(csv_path), j.dump(2) + "\n");
   io::write_file_atomically(csv_path, csv);
 }
 
 ElementTable read_element_table(const std::string& csv_path, bool values_only) {
-  const auto ends_with = [&](const std::string& e) { return csv_path.size() >= e.size() && csv_path.compare(csv_path.size() - e.size(), e.size(), e) == 0; };
-  if (!ends_with(".csv"))
-    throw InputError(csv_path + ": an element table is a .csv file (with a .json sidecar beside it)" +
-                     std::string(ends_with(".json") ? "; this looks like a JSON file, e.g. a normative reference or a sidecar: give the table's .csv" : ""));
+  if (!has_suffix(csv_path, ".tsv") && !has_suffix(csv_path, ".csv"))
+    throw InputError(csv_path + ": an element table is a .tsv (or .csv) file with a .json sidecar beside it" +
+                     std::string(has_suffix(csv_path, ".json")
+                                     ? "; this looks like a JSON file, e.g. a normative reference or a sidecar: give the table's .tsv"
+                                     : ""));
   const std::string sidecar = element_sidecar_path(csv_path);
   ElementTable t;
   {
     std::ifstream in(sidecar);
     if (!in)
       throw InputError(sidecar + ": cannot read the element table's JSON sidecar; element tables are written by "
-                                 "`authalic elements` or `authalic run` as a .csv with a .json beside it");
+                                 "`authalic elements` or `authalic run` as a .tsv with a .json beside it");
     nlohmann::json j;
     try {
       j = nlohmann::json::parse(in);
@@ -485,8 +516,9 @@ ElementTable read_element_table(const std::string& csv_path, bool values_only) {
   const int ne = t.grid.num_elements();
   for (auto& b : t.blocks) b.elements.assign(static_cast<std::size_t>(ne), Element{});
   std::vector<char> seen(static_cast<std::size_t>(ne) * t.blocks.size(), 0);
-  CsvCursor cur(text, csv_path);
-  cur.expect_header("id,hemisphere,row,col,area_mm2,centroid_x_mm,centroid_y_mm,centroid_z_mm,value,n_vertices");
+  const char d = element_table_delimiter(csv_path);
+  CsvCursor cur(text, csv_path, d);
+  cur.expect_header(element_table_header(d));
   std::size_t count = 0;
   while (cur.next_line()) {
     Element e;
@@ -534,8 +566,8 @@ namespace authalic::analysis {
 
 ElementOutputPaths element_output_paths(const std::string& prefix) {
   ElementOutputPaths p;
-  p.csv = prefix + ".csv";
-  p.sidecar = element_sidecar_path(p.csv);
+  p.table = prefix + ".tsv";
+  p.sidecar = element_sidecar_path(p.table);
   p.nifti = prefix + ".nii.gz";
   p.area_nifti = prefix + "_area.nii.gz";
   p.png = prefix + ".png";
@@ -544,7 +576,7 @@ ElementOutputPaths element_output_paths(const std::string& prefix) {
   return p;
 }
 
-std::vector<std::string> ElementOutputPaths::all() const { return {csv, sidecar, nifti, area_nifti, png, png_3d, label}; }
+std::vector<std::string> ElementOutputPaths::all() const { return {table, sidecar, nifti, area_nifti, png, png_3d, label}; }
 
 void write_element_nifti(const std::string& path, const std::vector<float>& data, const ElementGrid& grid, int blocks,
                          double element_area_mm2, ElementImageKind kind, const std::string& description) {
@@ -594,7 +626,7 @@ ElementOutputPaths write_element_outputs(const std::string& prefix, const Elemen
   const ElementBlock& block = table.blocks[0];
   const std::string units = table.units.empty() ? std::string("input units") : table.units;
 
-  write_element_table(p.csv, table);
+  write_element_table(p.table, table);
 
   const double element_area = mean_element_area(block);
   write_element_nifti(p.nifti, element_image(block, g), g, 1, element_area, ElementImageKind::kValues,

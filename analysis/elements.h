@@ -10,10 +10,11 @@
 // on each triangle this is the exact integral, whatever the map's distortion.
 //
 // Element tables (one row per element, one block per hemisphere) are what the normative reference
-// (analysis/normative.h) is built from. On disk: a CSV
-//     id,hemisphere,row,col,area_mm2,centroid_x_mm,centroid_y_mm,centroid_z_mm,value,n_vertices
+// (analysis/normative.h) is built from. On disk: a TSV (tab-separated; a .csv path gives commas)
+//     id hemisphere row col area_mm2 centroid_x_mm centroid_y_mm centroid_z_mm value n_vertices
 // (RAS = scanner RAS of the surface; value in the table's units; NaN written as "nan") and a JSON
-// sidecar next to it (same name, .json instead of .csv) with the grid and the provenance:
+// sidecar next to it (same name, .json instead of .tsv) with the grid, the provenance and each
+// column's Description and Units (as BIDS describes tabular files):
 //     {"format": "authalic-element-table", "version": 1, "domain": "square", "k": 32, "rows": 32,
 //      "cols": 32, "hemispheres": ["left"], "normalisation": "global", "units": "...",
 //      "subject_id": "...", "age": 67 | null, "metadata": {...}}
@@ -114,11 +115,12 @@ int element_of_point(const ElementGrid& grid, const double* point);
 
 // ---- element tables on disk -------------------------------------------------------------
 
-// "<path without .csv>.json".
+// "<path without .tsv or .csv>.json".
 std::string element_sidecar_path(const std::string& csv_path);
-// Writes the CSV and its JSON sidecar (atomically, each).
+// Writes the table and its JSON sidecar (atomically, each): tab-separated for a .tsv path (as `run`
+// and `elements` write them), comma-separated otherwise; the sidecar describes each column (units).
 void write_element_table(const std::string& csv_path, const ElementTable& table);
-// Reads the CSV and its sidecar; checks ids, rows, columns and grid size against the sidecar.
+// Reads the table (.tsv or .csv, by extension) and its sidecar; checks ids, rows, columns and grid size against the sidecar.
 // Throws InputError("<path>: <problem>; <hint>") on anything inconsistent. values_only: areas,
 // centroids and vertex counts are checked to be present but not parsed (the normative build needs
 // only the values; four times faster on large cohorts).
@@ -127,13 +129,13 @@ ElementTable read_element_table(const std::string& csv_path, bool values_only = 
 // ---- exported element images ------------------------------------------------------------
 
 struct ElementOutputPaths {
-  std::string csv, sidecar, nifti, area_nifti, png, png_3d, label;
+  std::string table, sidecar, nifti, area_nifti, png, png_3d, label;
   std::vector<std::string> all() const;
 };
 // The paths write_element_outputs writes for PREFIX (listed below).
 ElementOutputPaths element_output_paths(const std::string& prefix);
 // Writes, for a one-block table and its result on a surface (V_scanner: RAS mm, F: its faces):
-//   PREFIX.csv + PREFIX.json   the element table (write_element_table)
+//   PREFIX.tsv + PREFIX.json   the element table (write_element_table)
 //   PREFIX.nii.gz              cols x rows x 1 float image of element values (voxel (col, row));
 //                              the grid is the domain's, not a scanner space (write_element_nifti)
 //   PREFIX_area.nii.gz         the same with element areas (mm^2)

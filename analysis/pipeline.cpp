@@ -340,7 +340,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
 
   RunSummary summary;
   StepLog log(progress);
-  const std::string prefix = "sub-" + in.id;
+  const SubjectFiles names{in.id};
 
   // 1. Inputs: everything is read and checked before anything is written.
   log.begin("load and check inputs");
@@ -519,9 +519,8 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     summary.files.push_back(file);
   };
   const int K = options.k;
-  std::vector<io::SpecEntry> spec;  // sub-<id>.wb.spec: the files wb_view opens together
+  std::vector<io::SpecEntry> spec;  // sub-<id>_workbench.spec: the files wb_view opens together
   for (Hemisphere& h : hemis) {
-    const std::string hp = prefix + "_hemi-" + h.tag;
     // Flat map scaled so 1 mm^2 flat = 1 mm^2 cortex (on average).
     const double area = face_areas(h.map.V, h.map.F).sum();
     TriMesh flat;
@@ -535,15 +534,15 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     // The subject's own surfaces, which every per-vertex file below pairs with (Workbench spec).
     for (const auto& [surface, kind, source] : {std::tuple<const io::Surface*, std::string, std::string>{&h.white, "white", h.left ? in.lh_white : in.rh_white},
                                                  {&h.pial, "pial", h.left ? in.lh_pial : in.rh_pial}}) {
-      const std::string name = hp + "_" + kind + ".surf.gii";
+      const std::string name = names.surface(h.tag, kind);
       write_anatomical_surface((stage / name).string(), *surface, wo.anatomical_structure, kind);
       sidecar(name, {{"description", "the subject's " + kind + " surface in scanner RAS (mm), as read from " + source}});
       spec.push_back({wo.anatomical_structure, "SURFACE", name});
     }
-    const std::string flat_name = hp + "_space-authalic_flat.surf.gii";
+    const std::string flat_name = names.flat(h.tag);
     io::write_surface((stage / flat_name).string(), flat, wo);
-    // Per-vertex files show on the flat map in Workbench when it has the surface's vertices (the map
-    // inserts vertices only where a triangle has all three corners on the boundary).
+    // Per-vertex files show on the flat map in Workbench when it has the surface's vertices: always,
+    // unless a dividing edge could not be flipped and was split (core/conformal_map.h, step 3).
     if (flat.num_vertices() == h.white.mesh.num_vertices()) spec.push_back({wo.anatomical_structure, "SURFACE", flat_name});
     sidecar(flat_name, {{"description", "authalic flat map; square side sqrt(cortical area) mm"},
                         {"metrics", {{"flips", h.metrics.flips}, {"element_area_cv", h.metrics.element_cv}}}});
@@ -558,7 +557,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       rflat.F = part.F;
       io::SurfaceWriteOptions ro = wo;
       ro.metadata["space"] = "authalic whole-brain 2:1 rectangle scaled to the cortical area of both hemispheres (mm)";
-      const std::string rect_name = hp + "_space-authalicrect_flat.surf.gii";
+      const std::string rect_name = names.rectangle_flat(h.tag);
       io::write_surface((stage / rect_name).string(), rflat, ro);
       if (rflat.num_vertices() == h.white.mesh.num_vertices()) spec.push_back({wo.anatomical_structure, "SURFACE", rect_name});
       sidecar(rect_name, {{"description", "this hemisphere's part of the whole-brain 2:1 rectangle (left part x in [0, w_L], "
@@ -570,11 +569,11 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     fo.column_names = {"pet"};
     fo.anatomical_structure = wo.anatomical_structure;
     fo.metadata = {{"normalisation", table.normalisation}, {"units", table.units}, {"sampling", h.sampling.method}};
-    const std::string pet_name = hp + "_desc-pet.func.gii";
+    const std::string pet_name = names.pet(h.tag);
     io::write_per_vertex((stage / pet_name).string(), h.pet, fo);
     spec.push_back({wo.anatomical_structure, "METRIC", pet_name});
     sidecar(pet_name, {{"description", "PET per vertex (normal projection), normalised"}, {"units", table.units}});
-    const std::string img_name = hp + "_desc-pet_elements.nii.gz";
+    const std::string img_name = names.pet_elements(h.tag, ".nii.gz");
     write_element_nifti((stage / img_name).string(), element_image(h.elements.block, table.grid), table.grid, 1,
                         mean_element_area(h.elements.block), ElementImageKind::kValues, "authalic PET elements " + h.name);
     sidecar(img_name, {{"description", "element PET values, K x K (i = column, j = row from the bottom)"}, {"units", table.units},
@@ -584,26 +583,25 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     c.vmin = range.first;
     c.vmax = range.second;
     c.label = table.units;
-    const std::string png_name = hp + "_desc-pet_elements.png";
+    const std::string png_name = names.pet_elements(h.tag, ".png");
     io::write_png((stage / png_name).string(),
                   render_element_grid(block_values(h.elements.block), K, K, c, 12, h.name + " PET elements"));
     sidecar(png_name, {{"description", "element PET values"}});
-    const std::string labels_name = hp + "_desc-elements.label.gii";
+    const std::string labels_name = names.element_labels(h.tag);
     write_element_labels((stage / labels_name).string(), h.elements, table.grid);
     spec.push_back({wo.anatomical_structure, "LABEL", labels_name});
     sidecar(labels_name, {{"description", "each vertex's equal-area element: key = element id + 1 (id = row x K + column), 0 = "
                                           "in no element; pairs with the white and pial surfaces (the input's vertices)"}});
   }
-  const std::string table_name = prefix + "_elements.csv";
+  const std::string table_name = names.element_table();
   write_element_table((stage / table_name).string(), table);
   summary.files.push_back(table_name);
   if (compare) {
     for (int b = 0; b < 2; ++b) {
-      const std::string hp = prefix + "_hemi-" + hemis[b].tag;
       std::vector<double> z(cmp.z.begin() + b * table.grid.num_elements(), cmp.z.begin() + (b + 1) * table.grid.num_elements());
       ElementBlock zb = hemis[b].elements.block;
       for (std::size_t i = 0; i < zb.elements.size(); ++i) zb.elements[i].value = z[i];
-      const std::string zimg = hp + "_desc-z_elements.nii.gz";
+      const std::string zimg = names.zscore_elements(hemis[b].tag, ".nii.gz");
       write_element_nifti((stage / zimg).string(), element_image(zb, table.grid), table.grid, 1, mean_element_area(zb),
                           ElementImageKind::kZScore, "authalic z " + hemis[b].name);
       sidecar(zimg, {{"description", "element z-scores, z = (factor x patient - reference mean) / (reference SD x sqrt(1 + 1/n)); "
@@ -616,24 +614,24 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       zc.vmin = -4;
       zc.vmax = 4;
       zc.label = "z";
-      const std::string zpng = hp + "_desc-z_elements.png";
+      const std::string zpng = names.zscore_elements(hemis[b].tag, ".png");
       io::write_png((stage / zpng).string(), render_element_grid(z, K, K, zc, 12, hemis[b].name + " z-scores"));
       sidecar(zpng, {{"description", "element z-scores"}});
       io::FuncWriteOptions zo;
       zo.column_names = {"z"};
       zo.anatomical_structure = hemis[b].left ? "CortexLeft" : "CortexRight";
       zo.metadata = {{"description", "z of each vertex's equal-area element (NaN: in no element)"}, {"units", "z"}};
-      const std::string zfunc = hp + "_desc-z.func.gii";
+      const std::string zfunc = names.zscore(hemis[b].tag);
       io::write_per_vertex((stage / zfunc).string(), element_values_at_vertices(hemis[b].elements.vertex_element, z.data(),
                                                                                  static_cast<int>(z.size())), zo);
       sidecar(zfunc, {{"description", "per-vertex z: the z of the vertex's element; pairs with the white and pial surfaces"}});
       spec.push_back({zo.anatomical_structure, "METRIC", zfunc});
     }
-    const std::string clusters_name = prefix + "_desc-clusters.tsv";
+    const std::string clusters_name = names.clusters();
     io::write_file_atomically((stage / clusters_name).string(), clusters_tsv(cmp.clusters));
     sidecar(clusters_name, clusters_tsv_sidecar(options.z_threshold));
   }
-  const std::string spec_name = prefix + ".wb.spec";
+  const std::string spec_name = names.workbench_spec();
   io::write_workbench_spec((stage / spec_name).string(), spec);
   summary.files.push_back(spec_name);
 
@@ -701,13 +699,13 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     } else {
       rd.notes.push_back("No normative reference was given (--normative): PET only, no z-scores.");
     }
-    write_report((stage / "report.html").string(), rd);
-    summary.files.push_back("report.html");
+    write_report((stage / names.report()).string(), rd);
+    summary.files.push_back(names.report());
   }
   for (const auto& [base, j] : sidecars) io::write_file_atomically((stage / (base + ".json")).string(), j.dump(2) + "\n");
   log.end(summary);
-  io::write_file_atomically((stage / "log.txt").string(), software_version() + "\nsubject sub-" + in.id + "\n" + log.text());
-  summary.files.push_back("log.txt");
+  io::write_file_atomically((stage / names.log()).string(), software_version() + "\nsubject sub-" + in.id + "\n" + log.text());
+  summary.files.push_back(names.log());
 
   // Swap the finished folder into place.
   if (fs::exists(final_dir)) {

@@ -7,7 +7,7 @@
 // Output safety: everything is written into a staging folder `OUT/.sub-<id>.partial-<pid>` that
 // is renamed to `OUT/sub-<id>` only when every file is complete, so an interrupted run never
 // leaves a folder that looks finished. Same inputs -> identical files (no timestamps in outputs;
-// the log's timings live in log.txt only).
+// the log's timings live in sub-<id>_log.txt only). File names: SubjectFiles below.
 #include <string>
 #include <vector>
 
@@ -31,6 +31,34 @@ struct SubjectInputs {
 // missing file.
 SubjectInputs inputs_from_subjects_dir(const std::string& subjects_dir, const std::string& subject);
 
+// The names `run` gives its files in OUT/sub-<id>/ (BIDS derivatives: every name is
+// sub-<id>[_hemi-L|R][_<entity>-<value>...]_<suffix>.<extension>), in one place for run, group
+// and the tests. hemi: "L" or "R".
+struct SubjectFiles {
+  std::string id;  // subject label without "sub-"
+
+  std::string folder() const { return "sub-" + id; }
+  std::string surface(const std::string& hemi, const std::string& kind) const { return h(hemi) + "_" + kind + ".surf.gii"; }
+  std::string flat(const std::string& hemi) const { return h(hemi) + "_space-authalic_flat.surf.gii"; }
+  std::string rectangle_flat(const std::string& hemi) const { return h(hemi) + "_space-authalicrect_flat.surf.gii"; }
+  std::string pet(const std::string& hemi) const { return h(hemi) + "_pet.func.gii"; }
+  std::string zscore(const std::string& hemi) const { return h(hemi) + "_zscore.func.gii"; }
+  std::string element_labels(const std::string& hemi) const { return h(hemi) + "_desc-elements_dseg.label.gii"; }
+  // ext ".nii.gz" or ".png" (they share one sidecar).
+  std::string pet_elements(const std::string& hemi, const std::string& ext) const { return h(hemi) + "_desc-elements_pet" + ext; }
+  std::string zscore_elements(const std::string& hemi, const std::string& ext) const {
+    return h(hemi) + "_desc-elements_zscore" + ext;
+  }
+  std::string element_table() const { return folder() + "_elements.tsv"; }
+  std::string clusters() const { return folder() + "_clusters.tsv"; }
+  std::string workbench_spec() const { return folder() + "_workbench.spec"; }
+  std::string report() const { return folder() + "_report.html"; }
+  std::string log() const { return folder() + "_log.txt"; }
+
+ private:
+  std::string h(const std::string& hemi) const { return folder() + "_hemi-" + hemi; }
+};
+
 struct RunOptions {
   std::string out_dir;          // the subject's folder goes to out_dir/sub-<id>
   bool force = false;           // replace an existing sub-<id> folder
@@ -39,7 +67,7 @@ struct RunOptions {
   std::string normalize = "global";  // "none", "global", or a NIfTI mask path (reference region)
   double z_threshold = 2.0;     // |z| flagged as abnormal
   bool rescale = true;          // CompareOptions::rescale
-  bool report = true;           // write report.html
+  bool report = true;           // write sub-<id>_report.html
   bool rectangle = true;        // also the 2:1 whole-brain rectangle map
   bool require_age = false;     // refuse a reference with an age model when the age is unknown
   int pet_frame = -1;           // 4D PET: the frame to sample (0-based); -1: none chosen
@@ -56,7 +84,7 @@ struct RunSummary {
   int clusters = -1;
   std::string clusters_json;    // the clusters as a JSON array (analysis/normative.h clusters_json); "" without a reference
   std::vector<std::string> files;  // written, relative to subject_dir
-  std::vector<std::string> warnings;  // also in log.txt and the report
+  std::vector<std::string> warnings;  // also in the log and the report
 };
 
 // Runs the pipeline. Throws InputError (bad input, nothing written) or ProcessingError.

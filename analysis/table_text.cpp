@@ -35,7 +35,8 @@ bool read_text_file(const std::string& path, std::string& text) {
   return true;
 }
 
-CsvCursor::CsvCursor(std::string_view text, std::string path) : text_(text), path_(std::move(path)) {
+CsvCursor::CsvCursor(std::string_view text, std::string path, char delimiter)
+    : text_(text), path_(std::move(path)), delimiter_(delimiter) {
   if (text_.substr(0, 3) == "\xEF\xBB\xBF") next_ = 3;  // UTF-8 byte-order mark (spreadsheets)
 }
 
@@ -68,7 +69,7 @@ bool CsvCursor::next_line() {
 
 std::string_view CsvCursor::field() {
   if (at_end_of_fields_) fail("too few fields");
-  const std::size_t comma = text_.find(',', pos_);
+  const std::size_t comma = text_.find(delimiter_, pos_);
   std::size_t end = (comma == std::string_view::npos || comma > line_end_) ? line_end_ : comma;
   const std::string_view f = text_.substr(pos_, end - pos_);
   if (end == line_end_) {

@@ -13,11 +13,11 @@ void append_number(std::string& out, double x);
 // Whole file into `text`; false when it cannot be opened or read.
 bool read_text_file(const std::string& path, std::string& text);
 
-// Reads a comma-separated table with a header line, field by field. Errors throw InputError
-// "<path>:<line>: <problem>".
+// Reads a delimited table (comma-separated by default, tab-separated with delimiter '\t') with a
+// header line, field by field. Errors throw InputError "<path>:<line>: <problem>".
 class CsvCursor {
  public:
-  CsvCursor(std::string_view text, std::string path);
+  CsvCursor(std::string_view text, std::string path, char delimiter = ',');
   // Checks the header line (exact match after trimming a trailing '\r' and a UTF-8 BOM).
   void expect_header(std::string_view header);
   // Moves to the next non-empty line; false at the end of the text.
@@ -33,6 +33,7 @@ class CsvCursor {
  private:
   std::string_view text_;
   std::string path_;
+  char delimiter_ = ',';
   std::size_t pos_ = 0;       // start of the unread part of the current line
   std::size_t line_end_ = 0;  // end of the current line (excluding '\r\n')
   std::size_t next_ = 0;      // start of the next line

@@ -146,7 +146,7 @@ int run_elements(const ElementsArgs& a) {
   for (const auto& n : em.notes) info("authalic elements: note: " + n);
   info("authalic elements: " + std::to_string(grid.cols) + " x " + std::to_string(grid.rows) + " " + a.domain +
        " elements, element-area CV " + std::to_string(result.area_cv) + ", cortex " + std::to_string(result.total_area_mm2) +
-       " mm^2; wrote " + paths.csv + ", " + paths.nifti + ", " + paths.png + ", " + paths.label);
+       " mm^2; wrote " + paths.table + ", " + paths.nifti + ", " + paths.png + ", " + paths.label);
   if (global_options().json) {
     nlohmann::json j;
     j["domain"] = a.domain;
@@ -159,7 +159,7 @@ int run_elements(const ElementsArgs& a) {
     j["inserted_vertices"] = em.inserted_vertices;
     j["normalisation"] = table.normalisation;
     j["units"] = table.units;
-    j["outputs"] = {{"csv", paths.csv},   {"sidecar", paths.sidecar}, {"nifti", paths.nifti}, {"area_nifti", paths.area_nifti},
+    j["outputs"] = {{"table", paths.table},   {"sidecar", paths.sidecar}, {"nifti", paths.nifti}, {"area_nifti", paths.area_nifti},
                     {"png", paths.png},   {"png_3d", paths.png_3d},   {"label", paths.label}};
     j["notes"] = em.notes;
     j["elements_seconds"] = compute_seconds;
@@ -177,7 +177,7 @@ const bool registered = register_command({45, [](CLI::App& parent) {
       "Equal-area cortical elements: the cells of a regular grid on an authalic map (K x K on the square, 2K x K on the "
       "2:1 rectangle, 2K x K equal-area cells on the sphere), each with the area-weighted mean value of the cortex that "
       "maps into it (triangles clipped to the cells), its cortical area (mm^2) and centroid (scanner RAS mm). Writes "
-      "OUT_PREFIX.csv (+ .json sidecar), OUT_PREFIX.nii.gz (element values; _area.nii.gz: areas in mm^2), "
+      "OUT_PREFIX.tsv (+ .json sidecar), OUT_PREFIX.nii.gz (element values; _area.nii.gz: areas in mm^2), "
       "OUT_PREFIX.png (colour bar, units), OUT_PREFIX_3d.png (lateral/medial with the grid) and OUT_PREFIX.label.gii "
       "(per-vertex element: key = id + 1).");
   sub->add_option("SURFACE", a->surface, "Cortical surface the map was made from (mm)")->required();

@@ -23,6 +23,7 @@
 
 #include "app/cohort.h"
 #include "analysis/normative.h"
+#include "analysis/pipeline.h"
 #include "app/command.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
@@ -169,7 +170,7 @@ void write_participants(const std::string& out, const std::vector<CohortSubject>
     if (s.age > 0) std::snprintf(age, sizeof(age), "%g", s.age);
     const int code = exit_code.count(s.id) ? exit_code[s.id] : -1;
     tsv += "sub-" + s.id + "\t" + s.role + "\t" + age + "\t" + (s.sex.empty() ? "n/a" : s.sex) + "\t" +
-           (s.role == "control" ? "controls/sub-" : "patients/sub-") + s.id + "\t" +
+           analysis::SubjectFiles{s.id}.folder() + "\t" +
            (code == 0 ? "ok" : "failed (exit " + std::to_string(code) + ", see logs/" + s.id + ".log)") + "\n";
   }
   io::write_file_atomically((fs::path(out) / "participants.tsv").string(), tsv);
@@ -195,13 +196,14 @@ int run_group(const GroupArgs& a) {
   const int threads = std::max(1, cores / parallel);  // bounded: jobs x threads <= cores
   const ProgressFn progress = terminal_progress();
 
-  auto make_jobs = [&](const std::string& role, const std::string& dir, const std::vector<std::string>& extra) {
+  // Every subject's folder at the top of OUT (BIDS: OUT/sub-<id>/); participants.tsv gives each one's group.
+  auto make_jobs = [&](const std::string& role, const std::vector<std::string>& extra) {
     std::vector<Job> jobs;
     for (const auto& s : subjects) {
       if (s.role != role) continue;
       Job j;
       j.id = s.id;
-      j.argv = subject_args(exe, s, a.k, threads, (fs::path(a.out) / dir).string());
+      j.argv = subject_args(exe, s, a.k, threads, a.out);
       const std::vector<std::string> options = run_options(a);
       j.argv.insert(j.argv.end(), options.begin(), options.end());
       j.argv.insert(j.argv.end(), extra.begin(), extra.end());
@@ -212,7 +214,7 @@ int run_group(const GroupArgs& a) {
   };
 
   // 1. Controls: maps, sampling, elements.
-  std::vector<Job> controls = make_jobs("control", "controls", {});
+  std::vector<Job> controls = make_jobs("control", {});
   info("authalic group: " + std::to_string(controls.size()) + " controls, " + std::to_string(parallel) +
        " at once, " + std::to_string(threads) + " threads each");
   run_jobs(controls, parallel, "controls", progress);
@@ -222,7 +224,8 @@ int run_group(const GroupArgs& a) {
   int used = 0;
   for (const auto& j : controls) {
     if (j.exit_code != 0) continue;
-    build.push_back((fs::path(a.out) / "controls" / ("sub-" + j.id) / ("sub-" + j.id + "_elements.csv")).string());
+    const analysis::SubjectFiles names{j.id};
+    build.push_back((fs::path(a.out) / names.folder() / names.element_table()).string());
     ++used;
   }
   nlohmann::json summary;
@@ -247,7 +250,7 @@ int run_group(const GroupArgs& a) {
   std::vector<std::string> extra;
   const std::string reference = a.normative.empty() ? (fs::path(a.out) / "normative.json").string() : a.normative;
   if (reference_exit == 0) extra = {"--normative", reference};
-  std::vector<Job> patients = make_jobs("patient", "patients", extra);
+  std::vector<Job> patients = make_jobs("patient", extra);
   run_jobs(patients, parallel, "patients", progress);
 
   int failed = 0;
@@ -276,7 +279,7 @@ const bool registered = register_command({60, [](CLI::App& parent) {
       "pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex, optional t1 (run --t1: the PET is registered to it) and "
       "sex (F, M, O) (paths relative to the CSV; RFC 4180 CSV as spreadsheets "
       "write it: quoted fields, CRLF, a UTF-8 byte-order mark). Writes "
-      "OUT/controls/sub-<id>/, OUT/patients/sub-<id>/, OUT/participants.tsv (+ .json: group, age, sex, folder, status), OUT/normative.json and OUT/logs/<id>.log (each subject's progress and messages). "
+      "OUT/sub-<id>/ for every subject (as run writes it), OUT/participants.tsv (+ .json: group, age, sex, folder, status), OUT/normative.json and OUT/logs/<id>.log (each subject's progress and messages). "
       "A failed subject is reported and does not stop the others (exit 3 at the end).");
   sub->add_option("cohort", args->cohort, "Cohort list (CSV)")->required()->check(CLI::ExistingFile);
   sub->add_option("out", args->out, "Output folder")->required();

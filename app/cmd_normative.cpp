@@ -79,7 +79,7 @@ int run_build(const BuildArgs& a) {
       if (!line.empty() && line[0] != '#') tables.push_back(line);
     }
   }
-  if (tables.empty()) throw InputError("normative build: no element table given; list the controls' *_elements.csv files");
+  if (tables.empty()) throw InputError("normative build: no element table given; list the controls' *_elements.tsv files");
   std::vector<std::string> inputs = {a.list};
   for (const auto& t : tables) inputs.insert(inputs.end(), {t, analysis::element_sidecar_path(t)});
   io::check_file_roles(inputs, {a.out});
@@ -172,7 +172,7 @@ const bool registered = register_command({50, [](CLI::App& parent) {
   sub->require_subcommand(1);
 
   auto b = std::make_shared<BuildArgs>();
-  CLI::App* build = sub->add_subcommand("build", "Build a reference (JSON) from element tables (*_elements.csv with their .json sidecars)");
+  CLI::App* build = sub->add_subcommand("build", "Build a reference (JSON) from element tables (*_elements.tsv, or .csv, with their .json sidecars)");
   build->add_option("OUT", b->out, "Output reference (.json)")->required();
   build->add_option("TABLES", b->tables, "Element tables of the control subjects");
   build->add_option("--list", b->list, "Text file with one element-table path a line (for large cohorts)");
@@ -196,7 +196,7 @@ const bool registered = register_command({50, [](CLI::App& parent) {
       "Compare a patient's element table with a reference. Writes OUT_PREFIX_z.nii.gz, OUT_PREFIX_z.png, "
       "OUT_PREFIX_abnormal.csv, OUT_PREFIX.json and, with --labels, per-vertex z as OUT_PREFIX[_<hemisphere>]_z.func.gii.");
   compare->add_option("REFERENCE", c->reference, "Normative reference (.json)")->required();
-  compare->add_option("PATIENT", c->patient, "Patient's element table (.csv with its .json sidecar)")->required();
+  compare->add_option("PATIENT", c->patient, "Patient's element table (.tsv or .csv with its .json sidecar)")->required();
   compare->add_option("OUT_PREFIX", c->prefix, "Output prefix")->required();
   compare->add_option("--threshold", c->threshold, "|z| at or beyond which an element is abnormal")->capture_default_str();
   compare->add_option("--labels", c->labels,

@@ -80,7 +80,8 @@ int run(RunArgs& a) {
       info("  " + step + ": " + std::to_string(sec) + " s");
       total += sec;
     }
-    info("authalic run: sub-" + in.id + " done in " + std::to_string(total) + " s; report: " + s.subject_dir + "/report.html");
+    info("authalic run: sub-" + in.id + " done in " + std::to_string(total) + " s; report: " + s.subject_dir + "/" +
+         analysis::SubjectFiles{in.id}.report());
   }
   return 0;
 }
@@ -91,7 +92,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
       "run",
       "Per-subject pipeline: load and check inputs -> authalic square map per hemisphere -> PET by normal projection "
       "(inward from the pial surface) -> equal-area elements -> z-scores against a normative reference (if given) "
-      "-> report. Writes OUT/sub-<id>/ (BIDS-derivative names, a JSON sidecar per file, the white and pial surfaces in scanner RAS, a Workbench spec sub-<id>.wb.spec, report.html, log.txt); "
+      "-> report. Writes OUT/sub-<id>/ (BIDS-derivative names, a JSON sidecar per file, the white and pial surfaces in scanner RAS, a Workbench spec sub-<id>_workbench.spec, sub-<id>_report.html, sub-<id>_log.txt); "
       "the folder appears only when complete. Surfaces in tkregister RAS (FreeSurfer) are moved to scanner RAS "
       "with their footer's c_ras. Exit codes: 0 ok, 2 bad input, 3 processing failure.");
   auto& in = a->inputs;
@@ -124,7 +125,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_flag("--no-rescale", [a](std::int64_t) { a->options.rescale = false; },
                 "Compare the globally normalised values as they are, without rescaling the subject to the reference "
                 "over its normal elements (see `authalic normative compare --help`)");
-  sub->add_flag("--no-report", [a](std::int64_t) { a->options.report = false; }, "Skip report.html");
+  sub->add_flag("--no-report", [a](std::int64_t) { a->options.report = false; }, "Skip sub-<id>_report.html");
   sub->add_flag("--no-rectangle", [a](std::int64_t) { a->options.rectangle = false; },
                 "Skip the whole-brain 2:1 rectangle map (sub-<id>_hemi-?_space-authalicrect_flat.surf.gii)");
   add_common_options(*sub);

@@ -183,22 +183,22 @@ def sh(*args):
 rows = list(csv.DictReader(open(os.path.join(sample, "cohort.csv"))))
 controls = [r["subject_id"] for r in rows if r["role"] == "control"]
 patients = [r["subject_id"] for r in rows if r["role"] == "patient"]
-table = lambda kind, s: os.path.join(grp, kind, f"sub-{s}", f"sub-{s}_elements.csv")
+table = lambda s: os.path.join(grp, f"sub-{s}", f"sub-{s}_elements.tsv")
 fractions = []
 for s in controls:
     ref = os.path.join(val, f"loo-{s}.json")
-    sh("normative", "build", ref, *[table("controls", c) for c in controls if c != s], "--quiet")
-    j = json.loads(sh("normative", "compare", ref, table("controls", s), os.path.join(val, f"loo-{s}"), "--json", "--quiet"))
+    sh("normative", "build", ref, *[table(c) for c in controls if c != s], "--quiet")
+    j = json.loads(sh("normative", "compare", ref, table(s), os.path.join(val, f"loo-{s}"), "--json", "--quiet"))
     fractions.append((j["counts"]["hypo"] + j["counts"]["hyper"]) / j["counts"]["compared"])
 f = 100 * np.array(fractions)
 print(f"loo|leave-one-out, {len(controls)} controls (vs other {len(controls)-1})|mean {f.mean():.1f}%, largest {f.max():.1f}% "
       f"flagged at |z|>=2 (<= 5%); {int((f > 5).sum())} control(s) above 5%; for comparison, Gaussian element values "
       f"would give 6.1% on average (t, 18 df, predictive SD)")
 for p in patients:
-    d = os.path.join(grp, "patients", f"sub-{p}")
+    d = os.path.join(grp, f"sub-{p}")
     inside = outside = found = false = 0
-    sh("normative", "compare", os.path.join(grp, "normative.json"), table("patients", p), os.path.join(val, p), "--quiet")
-    sh("normative", "compare", os.path.join(grp, "normative.json"), table("patients", p), os.path.join(val, p + "-norescale"),
+    sh("normative", "compare", os.path.join(grp, "normative.json"), table(p), os.path.join(val, p), "--quiet")
+    sh("normative", "compare", os.path.join(grp, "normative.json"), table(p), os.path.join(val, p + "-norescale"),
        "--quiet", "--no-rescale")
     z = np.asarray(nib.load(os.path.join(val, f"{p}_z.nii.gz")).dataobj, dtype=float)
     z0 = np.asarray(nib.load(os.path.join(val, f"{p}-norescale_z.nii.gz")).dataobj, dtype=float)

@@ -128,9 +128,9 @@ for s in ["white", "pial"]:
              (f"sphere {s} element CV", cv, 0.005), (f"sphere {s} per-face mean", face, 0.05), (f"sphere {s} wall s", wall, 15.0)]
 code = int(open(os.path.join(work, "run.code")).read())
 wall, cpu, rss = timing("run")
-log = os.path.join(work, "run", "sub-fs741", "log.txt")
+log = os.path.join(work, "run", "sub-fs741", "sub-fs741_log.txt")
 cvs = re.findall(r"element-area CV ([0-9.e-]+)", open(log).read()) if os.path.exists(log) else []
-report = os.path.exists(os.path.join(work, "run", "sub-fs741", "report.html"))
+report = os.path.exists(os.path.join(work, "run", "sub-fs741", "sub-fs741_report.html"))
 print(f"\nrun on the subject (left + mirror, SPM PET): exit {code}, {wall:.1f} s wall, {cpu:.1f} s cpu, {rss:.0f} MB, "
       f"report {'written' if report else 'missing'}; element CV left/right square, rectangle (64x32): {', '.join(cvs) or '-'}")
 reqs += [("run exit code", code, 0), ("run wall s", wall, 60.0), ("run report written", 0 if report else 1, 0)]

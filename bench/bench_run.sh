@@ -24,7 +24,7 @@ timed() {  # NAME TARGET ARGS...: runs authalic run, prints a table row and the 
   wall=$(awk -F': ' '/Elapsed \(wall clock\)/{print $2}' "$work/$name.time" | awk -F: '{ if (NF==3) print $1*3600+$2*60+$3; else print $1*60+$2 }')
   rss=$(awk -F': ' '/Maximum resident set size/{printf "%.0f", $2/1024}' "$work/$name.time")
   printf '| %-40s | %8s | %8s | %s |\n' "$name" "$wall" "$rss" "$target"
-  LOGS+=("$name" "$(cat "$work/$name"/sub-*/log.txt)")
+  LOGS+=("$name" "$(cat "$work/$name"/sub-*/sub-*_log.txt)")
 }
 LOGS=()
 echo "| run                                      | wall (s) | RSS (MB) | target |"
@@ -57,6 +57,6 @@ echo
 echo "targets: phantom <= 5 s, fsaverage5 <= 10 s (issue 7); load average at the end: $(cut -d' ' -f1-3 /proc/loadavg) on $(nproc) cores"
 for ((i = 0; i < ${#LOGS[@]}; i += 2)); do
   echo
-  echo "log.txt of ${LOGS[i]}:"
+  echo "run log of ${LOGS[i]}:"
   echo "${LOGS[i + 1]}"
 done

@@ -50,10 +50,10 @@ TEST(ElementsCli, WritesTableImagesAndLabelsWithEqualAreasOnAnIsometricMap) {
   EXPECT_LT(j["element_area_cv"].get<double>(), 1e-9);
   EXPECT_NEAR(j["total_area_mm2"].get<double>(), 1600.0, 1e-6);
   EXPECT_EQ(j["hemisphere"], "left");
-  for (const char* suffix : {".csv", ".json", ".nii.gz", "_area.nii.gz", ".png", "_3d.png", ".label.gii"})
+  for (const char* suffix : {".tsv", ".json", ".nii.gz", "_area.nii.gz", ".png", "_3d.png", ".label.gii"})
     EXPECT_TRUE(std::filesystem::exists(dir + "/el" + suffix)) << suffix;
 
-  const analysis::ElementTable t = analysis::read_element_table(dir + "/el.csv");
+  const analysis::ElementTable t = analysis::read_element_table(dir + "/el.tsv");
   EXPECT_EQ(t.normalisation, "global");
   EXPECT_EQ(t.subject_id, "s01");
   EXPECT_EQ(t.age, 70.0);
@@ -88,7 +88,7 @@ TEST(ElementsCli, WritesTableImagesAndLabelsWithEqualAreasOnAnIsometricMap) {
                               &out),
             2);
   EXPECT_NE(out.find("wide.surf.gii: the map spans"), std::string::npos) << out;
-  EXPECT_FALSE(std::filesystem::exists(dir + "/bad.csv"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/bad.tsv"));
 }
 
 // Issue 5 on ../shared/data: `authalic flatten` of B1 (fsaverage5 white_left, cortex = the faces of
@@ -122,7 +122,7 @@ TEST(ElementsCliRealData, AuthalicSquareMapOfB1HasEqualAreaElementsConformalDoes
   std::cout << "[ B1 element-area CV at K=32 (authalic flatten + elements): authalic " << cv[0] << ", conformal " << cv[1] << " ]\n";
   // A linear field's element value is its value at the element's centroid (exact integration),
   // also next to the boundary, where the flattening appended vertices: they were traced right.
-  const analysis::ElementTable t = analysis::read_element_table(dir + "/el_uv.csv");
+  const analysis::ElementTable t = analysis::read_element_table(dir + "/el_uv.tsv");
   ASSERT_TRUE(surface.to_scanner.isIdentity());
   int checked = 0;
   for (const auto& e : t.blocks[0].elements) {

@@ -47,13 +47,13 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   const auto lines = first_code_block(std::string(AUTHALIC_SOURCE_DIR) + "/README.md");
   ASSERT_EQ(lines.size(), 2u);
   const std::string main_job = lines[0].substr(lines[0].rfind("&&") + 2);
-  // The report folder the job promises: --out DIR and --id ID -> DIR/sub-ID/report.html.
+  // The report folder the job promises: --out DIR and --id ID -> DIR/sub-ID/sub-ID_report.html.
   std::smatch out, id;
   ASSERT_TRUE(std::regex_search(main_job, out, std::regex("--out\\s+(\\S+)")));
   ASSERT_TRUE(std::regex_search(main_job, id, std::regex("--id\\s+(\\S+)")));
   const fs::path root(AUTHALIC_SOURCE_DIR);
   ASSERT_TRUE(fs::exists(root / "build/authalic")) << "build/authalic is missing: run the README's first line first";
-  const fs::path report = root / out[1].str() / ("sub-" + id[1].str()) / "report.html";
+  const fs::path report = root / out[1].str() / ("sub-" + id[1].str()) / ("sub-" + id[1].str() + "_report.html");
   std::string output;
   const int rc = authalic::test::run_command("cd '" + root.string() + "' && " + main_job + " --quiet", &output);
   ASSERT_EQ(rc, 0) << output;
@@ -73,7 +73,7 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   EXPECT_EQ(d.at("DatasetType"), "derivative");
   EXPECT_FALSE(d.at("BIDSVersion").get<std::string>().empty());
   EXPECT_EQ(d.at("GeneratedBy").at(0).at("Name"), "authalic");
-  std::ifstream sc(root / out[1].str() / ("sub-" + id[1].str()) / ("sub-" + id[1].str() + "_hemi-L_desc-z_elements.json"));
+  std::ifstream sc(root / out[1].str() / ("sub-" + id[1].str()) / ("sub-" + id[1].str() + "_hemi-L_desc-elements_zscore.json"));
   ASSERT_TRUE(sc.good());
   const auto j = nlohmann::json::parse(sc);
   EXPECT_NE(j.at("command_line").get<std::string>().find("build/authalic run --id " + id[1].str()), std::string::npos) << j.dump(1);
@@ -87,21 +87,41 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   // and per hemisphere the per-vertex z and element label, on the input's vertices.
   const fs::path subject = root / out[1].str() / ("sub-" + id[1].str());
   const std::string stem = "sub-" + id[1].str();
-  std::ifstream tsv(subject / (stem + "_desc-clusters.tsv"));
+  std::ifstream tsv(subject / (stem + "_clusters.tsv"));
   std::string header, first;
   ASSERT_TRUE(std::getline(tsv, header));
   EXPECT_EQ(header, "cluster\themisphere\tdirection\telements\tarea_mm2\tpeak_z\tmean_z\tpeak_row\tpeak_col\tpeak_x_mm\tpeak_y_mm\tpeak_z_mm");
   ASSERT_TRUE(std::getline(tsv, first)) << "the sample patient has clusters";
   EXPECT_EQ(first.rfind("1\t", 0), 0u) << first;
-  std::ifstream tsv_sidecar(subject / (stem + "_desc-clusters.json"));
+  std::ifstream tsv_sidecar(subject / (stem + "_clusters.json"));
   EXPECT_EQ(nlohmann::json::parse(tsv_sidecar).at("area_mm2").at("Units"), "mm^2");
   std::smatch white;
   ASSERT_TRUE(std::regex_search(main_job, white, std::regex("--lh-white\\s+(\\S+)")));
   const int nv = authalic::io::read_surface((root / white[1].str()).string()).mesh.num_vertices();
-  const authalic::VectorXd z = authalic::io::read_per_vertex((subject / (stem + "_hemi-L_desc-z.func.gii")).string(), nv);
+  const authalic::VectorXd z = authalic::io::read_per_vertex((subject / (stem + "_hemi-L_zscore.func.gii")).string(), nv);
   EXPECT_LT(z.array().isNaN().select(0.0, z.array()).minCoeff(), -2.0) << "the planted region is hypometabolic";
-  const authalic::VectorXd labels = authalic::io::read_per_vertex((subject / (stem + "_hemi-L_desc-elements.label.gii")).string(), nv);
+  const authalic::VectorXd labels = authalic::io::read_per_vertex((subject / (stem + "_hemi-L_desc-elements_dseg.label.gii")).string(), nv);
   EXPECT_GT(labels.maxCoeff(), 1000.0);  // element ids + 1 up to K^2 = 1024
+
+  // Issue 15 item 5: every file is named sub-<id>[_hemi-L|R][_<key>-<value>...]_<suffix>.<ext>
+  // (a BIDS suffix on every one), and every table has a JSON sidecar giving each column's units.
+  const std::regex bids("sub-" + id[1].str() + "(_hemi-[LR])?(_[a-z]+-[A-Za-z0-9]+)*_[A-Za-z0-9]+\\.[a-z][a-z.]*");
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(subject)) {
+    const std::string name = e.path().filename().string();
+    EXPECT_TRUE(std::regex_match(name, bids)) << name << " has no BIDS suffix";
+    ++files;
+    if (e.path().extension() == ".tsv") {
+      std::ifstream side(subject / (e.path().stem().string() + ".json"));
+      ASSERT_TRUE(side.good()) << name << " has no sidecar";
+      const auto js = nlohmann::json::parse(side);
+      const auto& columns = js.contains("columns") ? js.at("columns") : js;
+      EXPECT_TRUE(columns.contains("area_mm2") && columns.at("area_mm2").at("Units") == "mm^2") << name << ": " << js.dump(1);
+    }
+  }
+  EXPECT_GE(files, 40);
+  EXPECT_TRUE(fs::exists(subject / (stem + "_elements.tsv")));
+  EXPECT_TRUE(fs::exists(subject / (stem + "_log.txt")));
 
   // Issue 15 item 7: a Workbench spec per subject names the surfaces and the per-vertex files on
   // them; wb_command reads it, and every file it lists opens in wb_command with the structure the
@@ -111,7 +131,7 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   ASSERT_EQ(written_white.mesh.num_vertices(), nv);
   const Eigen::Vector4d v0 = input_white.to_scanner * input_white.mesh.V.row(0).transpose().homogeneous();
   EXPECT_LT((written_white.mesh.V.row(0).transpose() - v0.head<3>()).norm(), 1e-3) << "written in scanner RAS";
-  const fs::path spec_path = subject / (stem + ".wb.spec");
+  const fs::path spec_path = subject / (stem + "_workbench.spec");
   ASSERT_TRUE(fs::exists(spec_path));
   if (authalic::test::run_command("command -v wb_command > /dev/null 2>&1") != 0) {
     if (authalic::test::running_in_ci()) FAIL() << "CI=true but wb_command (connectome-workbench) is missing";

@@ -177,7 +177,7 @@ TEST(RegionCli, RunCleansALabelAndLogsWhatChanged) {
                         &out),
             0)
       << out;
-  std::ifstream f(dir + "/out/sub-c01/log.txt");
+  std::ifstream f(dir + "/out/sub-c01/sub-c01_log.txt");
   const std::string log{std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
   EXPECT_NE(log.find("  left cortex lh.cortex.label: " + std::to_string(changed.vertices.size()) + " label vertices, " +
                      std::to_string(expected.F.rows()) + " faces, "),

@@ -147,8 +147,8 @@ TEST(ReliabilityCli, EveryCommandRefusesToWriteOverItsInput) {
   const std::string pet = dir + "/pet.nii.gz";
   fs::copy_file(sample("sub-patient01/sub-patient01_pet.nii.gz"), pet);
   expect_refused(bin() + " sample " + q(pet) + " " + q(sample("surf/lh.pial")) + " " + q(pet), same, {pet});
-  // elements: PREFIX.csv would be the values file.
-  const std::string values = dir + "/v.csv";
+  // elements: PREFIX.tsv would be the values file.
+  const std::string values = dir + "/v.tsv";
   { std::ofstream(values) << "1\n"; }
   expect_refused(bin() + " elements " + q(patch) + " " + q(patch) + " " + q(values) + " " + q(dir + "/v"), same, {values});
   // normative build T1 T1 T2: the first control's table as the output (and its sidecar).
@@ -202,7 +202,7 @@ TEST(ReliabilityCli, ASecondRunOnTheSameSubjectFolderIsRefusedWhileTheFirstRuns)
   int status = 0;
   ASSERT_EQ(::waitpid(first, &status, 0), first);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
-  EXPECT_TRUE(fs::exists(out + "/sub-patient01/report.html"));
+  EXPECT_TRUE(fs::exists(out + "/sub-patient01/sub-patient01_report.html"));
   EXPECT_FALSE(fs::exists(lock)) << "the lock file was left behind";
   EXPECT_FALSE(fs::exists(out + "/.sub-patient01.partial-999999")) << "a dead run's staging folder was left";
   // The finished folder is not replaced without --force, under the lock as before.
@@ -390,10 +390,10 @@ TEST(ReliabilityCli, RunWithoutAgeAgainstAnAgeModelWarnsOrIsRefused) {
   ASSERT_EQ(test::run_command(run_args(dir + "/b") + " --normative " + ref, &out), 0) << out;
   EXPECT_NE(out.find("authalic run: warning:"), std::string::npos) << "--quiet must not hide the warning: " << out;
   EXPECT_NE(out.find("NOT age adjusted"), std::string::npos) << out;
-  std::ifstream log(dir + "/b/sub-patient01/log.txt");
+  std::ifstream log(dir + "/b/sub-patient01/sub-patient01_log.txt");
   const std::string text((std::istreambuf_iterator<char>(log)), {});
   EXPECT_NE(text.find("NOT age adjusted"), std::string::npos) << text;
-  std::ifstream report(dir + "/b/sub-patient01/report.html");
+  std::ifstream report(dir + "/b/sub-patient01/sub-patient01_report.html");
   const std::string html((std::istreambuf_iterator<char>(report)), {});
   EXPECT_NE(html.find("NOT age adjusted"), std::string::npos);
   // With the age: no warning.
@@ -566,11 +566,11 @@ TEST(ReliabilityCli, GroupTakesRunOptionsAndAnExistingReference) {
                               &out),
             0)
       << out;
-  const std::string subject = dir + "/g/patients/sub-p01";
+  const std::string subject = dir + "/g/sub-p01";
   EXPECT_FALSE(fs::exists(dir + "/g/normative.json")) << "no reference is built when one is given";
-  EXPECT_TRUE(fs::exists(subject + "/sub-p01_hemi-L_desc-z_elements.nii.gz"));
+  EXPECT_TRUE(fs::exists(subject + "/sub-p01_hemi-L_desc-elements_zscore.nii.gz"));
   EXPECT_FALSE(fs::exists(subject + "/sub-p01_hemi-L_space-authalicrect_flat.surf.gii")) << "--no-rectangle was passed on";
-  std::ifstream sc(subject + "/sub-p01_hemi-L_desc-z_elements.json");
+  std::ifstream sc(subject + "/sub-p01_hemi-L_desc-elements_zscore.json");
   const std::string text((std::istreambuf_iterator<char>(sc)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("\"z_threshold\": 3.0"), std::string::npos) << text;
 }
@@ -602,7 +602,7 @@ TEST(ReliabilityCli, CohortOptionalSexAndT1Columns) {
                               &out),
             0)
       << out;
-  std::ifstream sc(dir + "/g/patients/sub-p01/sub-p01_hemi-L_desc-z_elements.json");
+  std::ifstream sc(dir + "/g/sub-p01/sub-p01_hemi-L_desc-elements_zscore.json");
   const auto j = nlohmann::json::parse(sc);
   EXPECT_EQ(j.at("participant").at("sex"), "F") << j.dump(1);
   EXPECT_DOUBLE_EQ(j.at("participant").at("age").get<double>(), 68.2);
@@ -611,9 +611,13 @@ TEST(ReliabilityCli, CohortOptionalSexAndT1Columns) {
   std::string header, row;
   ASSERT_TRUE(std::getline(tsv, header) && std::getline(tsv, row));
   EXPECT_EQ(header, "participant_id\tgroup\tage\tsex\tfolder\tstatus");
-  EXPECT_EQ(row, "sub-p01\tpatient\t68.2\tF\tpatients/sub-p01\tok");
+  EXPECT_EQ(row, "sub-p01\tpatient\t68.2\tF\tsub-p01\tok");
   std::ifstream columns(dir + "/g/participants.json");
   EXPECT_EQ(nlohmann::json::parse(columns).at("age").at("Units"), "year");
+  // A BIDS derivative layout: subjects at the top of --out, their group in participants.tsv.
+  EXPECT_FALSE(fs::exists(dir + "/g/patients"));
+  EXPECT_FALSE(fs::exists(dir + "/g/controls"));
+  EXPECT_TRUE(fs::exists(dir + "/g/dataset_description.json"));
   EXPECT_EQ(test::run_command(bin() + " run --sex q --out " + q(dir + "/r"), &out), 2) << out;
   EXPECT_NE(out.find("sex 'q' is not F, M or O"), std::string::npos) << out;
 }
@@ -711,7 +715,7 @@ TEST(ReliabilityCli, GroupLogsEverySubjectAndMissingOutputFoldersAreOneLine) {
   const std::string ref_text((std::istreambuf_iterator<char>(ref)), std::istreambuf_iterator<char>());
   EXPECT_NE(ref_text.find("3 subjects"), std::string::npos) << ref_text;
 
-  const std::string table = dir + "/g/patients/sub-patient01/sub-patient01_elements.csv";
+  const std::string table = dir + "/g/sub-patient01/sub-patient01_elements.tsv";
   expect_refused(bin() + " normative compare " + q(dir + "/g/normative.json") + " " + q(table) + " " + q(dir + "/none/x"),
                  "folder " + dir + "/none does not exist; create it first", {table});
   EXPECT_FALSE(fs::exists(dir + "/none"));

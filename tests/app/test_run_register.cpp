@@ -21,7 +21,7 @@ std::string slurp(const std::string& path) {
   return s.str();
 }
 
-// The value column of an element CSV (header: id,hemisphere,row,col,area_mm2,cx,cy,cz,value,n).
+// The value column of an element TSV (header: id hemisphere row col area_mm2 cx cy cz value n).
 std::vector<double> element_values(const std::string& csv) {
   std::istringstream in(slurp(csv));
   std::string line;
@@ -30,7 +30,7 @@ std::vector<double> element_values(const std::string& csv) {
   while (std::getline(in, line)) {
     std::istringstream row(line);
     std::string cell;
-    for (int c = 0; c <= 8 && std::getline(row, cell, ','); ++c)
+    for (int c = 0; c <= 8 && std::getline(row, cell, '\t'); ++c)
       if (c == 8) v.push_back(cell.empty() || cell == "nan" ? std::nan("") : std::stod(cell));
   }
   return v;
@@ -48,10 +48,10 @@ TEST(RunRegister, T1RegistrationOfAnAlignedPetChangesNothing) {
   std::string out;
   ASSERT_EQ(run_command(authalic_binary() + common + dir + "/plain", &out), 0) << out;
   ASSERT_EQ(run_command(authalic_binary() + common + dir + "/registered --t1 " + pet, &out), 0) << out;
-  const std::string log = slurp(dir + "/registered/sub-c01/log.txt");
+  const std::string log = slurp(dir + "/registered/sub-c01/sub-c01_log.txt");
   EXPECT_NE(log.find("PET registered to the T1"), std::string::npos) << log;
-  const auto a = element_values(dir + "/plain/sub-c01/sub-c01_elements.csv");
-  const auto b = element_values(dir + "/registered/sub-c01/sub-c01_elements.csv");
+  const auto a = element_values(dir + "/plain/sub-c01/sub-c01_elements.tsv");
+  const auto b = element_values(dir + "/registered/sub-c01/sub-c01_elements.tsv");
   ASSERT_EQ(a.size(), b.size());
   ASSERT_GT(a.size(), 100u);
   double worst = 0;

@@ -39,7 +39,10 @@ pid_t start(const std::vector<std::string>& args) {
 }
 
 // A finished subject folder has its log (written last, just before the rename).
-bool looks_complete(const fs::path& dir) { return fs::exists(dir / "log.txt") && fs::exists(dir / "report.html"); }
+bool looks_complete(const fs::path& dir) {
+  const std::string stem = dir.filename().string();  // sub-<id>
+  return fs::exists(dir / (stem + "_log.txt")) && fs::exists(dir / (stem + "_report.html"));
+}
 
 }  // namespace
 

@@ -52,10 +52,10 @@ TEST(Workflow, SnakemakeOnThePhantomCohortMergesToTheDirectReference) {
                                    &log);
   ASSERT_EQ(rc, 0) << log;
   const std::string out = dir + "/results";
-  EXPECT_TRUE(fs::exists(out + "/patients/sub-patient01/report.html")) << log;
+  EXPECT_TRUE(fs::exists(out + "/sub-patient01/sub-patient01_report.html")) << log;
   std::vector<std::string> tables;
   for (const char* id : {"control01", "control02", "control03"}) {
-    tables.push_back(out + "/controls/sub-" + id + "/sub-" + id + "_elements.csv");
+    tables.push_back(out + "/sub-" + id + "/sub-" + id + "_elements.tsv");
     ASSERT_TRUE(fs::exists(tables.back())) << log;
     EXPECT_TRUE(fs::exists(out + "/partials/" + id + ".json"));
   }
