@@ -180,8 +180,24 @@ void set_exit_code(int code) { g_exit_code = code; }
 
 }  // namespace authalic::app
 
+namespace {
+
+// OpenMP's default wait policy spins idle threads before they sleep: on a loaded 2-core machine
+// that made 2 threads 1.23x slower than 1 (fs741 lh.white cortex map, wall, 3 paired runs), and
+// with "passive" 2 threads take 0.96x the time of 1 (bench/bench_threads.sh). libgomp reads the
+// variable when it is loaded, before main, so the process executes itself once more with it set.
+// A wait policy the user set is kept; if the exec fails, the run goes on with the default.
+void use_passive_openmp_wait(char** argv) {
+  if (std::getenv("OMP_WAIT_POLICY") != nullptr) return;
+  if (::setenv("OMP_WAIT_POLICY", "passive", 1) != 0) return;
+  ::execv("/proc/self/exe", argv);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace authalic;
+  use_passive_openmp_wait(argv);
   if (const char* parent = std::getenv(app::kParentPidVariable)) {
     // Started by `authalic group`: end with it. The check after prctl closes the race of a parent
     // that died before the request was made.
