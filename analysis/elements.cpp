@@ -174,6 +174,28 @@ ElementGrid element_grid(ElementDomain domain, int k) {
   return g;
 }
 
+std::string seam_text(double seam_x) {
+  if (!std::isfinite(seam_x)) return "none";
+  std::string s;
+  append_number(s, seam_x);
+  return s;
+}
+
+double parse_seam(const std::string& text, const std::string& what) {
+  if (text == "none") return std::nan("");
+  double x = 0;
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), x);
+  if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !(x > 0 && x < 2))
+    throw InputError(what + ": metadata " + kSeamKey + " '" + text + "' is not a seam x in (0, 2) or \"none\"; rewrite the map with `authalic rectangle`");
+  return x;
+}
+
+bool same_part(const ElementGrid& grid, int c1, int c2) {
+  if (grid.domain != ElementDomain::Rectangle || !std::isfinite(grid.seam_x)) return true;
+  const auto left = [&](int c) { return (c + 0.5) / grid.k < grid.seam_x; };
+  return left(c1) == left(c2);
+}
+
 std::string hemisphere_of(const std::map<std::string, std::string>& metadata, const std::string& path) {
   const auto it = metadata.find("AnatomicalStructurePrimary");
   if (it != metadata.end()) {
@@ -445,6 +467,8 @@ void write_element_table(const std::string& csv_path, const ElementTable& table)
   j["cols"] = table.grid.cols;
   j["hemispheres"] = nlohmann::json::array();
   for (const auto& b : table.blocks) j["hemispheres"].push_back(b.hemisphere);
+  if (table.grid.domain == ElementDomain::Rectangle)
+    j["seam_x"] = std::isfinite(table.grid.seam_x) ? nlohmann::json(table.grid.seam_x) : nlohmann::json(nullptr);
   j["normalisation"] = table.normalisation;
   j["units"] = table.units;
   j["subject_id"] = table.subject_id;
@@ -499,6 +523,11 @@ ElementTable read_element_table(const std::string& csv_path, bool values_only) {
       if (j.at("rows").get<int>() != t.grid.rows || j.at("cols").get<int>() != t.grid.cols)
         throw InputError(sidecar + ": rows/cols do not match domain " + to_string(domain) + " at k = " + std::to_string(t.grid.k));
       for (const auto& h : j.at("hemispheres")) t.blocks.push_back({h.get<std::string>(), {}});
+      if (domain == ElementDomain::Rectangle && j.contains("seam_x")) {  // older tables: 1
+        t.grid.seam_x = j["seam_x"].is_null() ? std::nan("") : j["seam_x"].get<double>();
+        if (std::isfinite(t.grid.seam_x) && !(t.grid.seam_x > 0 && t.grid.seam_x < 2))
+          throw InputError(sidecar + ": seam_x " + std::to_string(t.grid.seam_x) + " is outside (0, 2); the table's sidecar is corrupt");
+      }
       t.normalisation = j.value("normalisation", "none");
       t.units = j.value("units", "");
       t.subject_id = j.value("subject_id", "");

@@ -42,8 +42,21 @@ struct ElementGrid {
   ElementDomain domain = ElementDomain::Square;
   int k = 32;
   int rows = 32, cols = 32;
+  // Rectangle of two hemispheres: x where the left part ends and the right begins (w_L =
+  // 2 A_L / (A_L + A_R), core/rectangle_map.h); 1 when the parts are not known to differ, NaN for a
+  // one-surface rectangle (no seam). The hemispheres touch there only in the map (clusters do not
+  // cross it: same_part).
+  double seam_x = 1.0;
   int num_elements() const { return rows * cols; }
 };
+// The map-file metadata key that carries seam_x ("none" for one surface), and its text.
+inline constexpr const char* kSeamKey = "authalic_seam_x";
+std::string seam_text(double seam_x);
+// seam_x from that metadata text (what: the file, for the error): "none" -> NaN; a number in (0, 2).
+double parse_seam(const std::string& text, const std::string& what);
+// Whether element columns c1 and c2 lie in the same hemisphere part of a two-part rectangle (by
+// their centres' side of seam_x); always true for other domains and a one-surface rectangle.
+bool same_part(const ElementGrid& grid, int c1, int c2);
 ElementGrid element_grid(ElementDomain domain, int k);
 
 struct Element {

@@ -382,8 +382,8 @@ std::vector<int> label_clusters(const ElementGrid& grid, const std::vector<int>&
             cc = (cc + cols) % cols;  // longitude wraps
           } else {
             if (cc < 0 || cc >= cols) continue;
-            // Whole-brain rectangle: the two hemispheres meet at x = 1 only in the map, not in the brain.
-            if (grid.domain == ElementDomain::Rectangle && (c < grid.k) != (cc < grid.k)) continue;
+            // Whole-brain rectangle: the two hemispheres meet at the seam only in the map, not in the brain.
+            if (!same_part(grid, c, cc)) continue;
           }
           const int n = rr * cols + cc;
           if (flags[static_cast<std::size_t>(n)] != sign || label[static_cast<std::size_t>(n)] != 0) continue;
@@ -522,7 +522,9 @@ Comparison compare_to_reference(const NormativeReference& ref, const ElementTabl
     std::vector<int> flags(out.flag.begin() + static_cast<std::ptrdiff_t>(offset),
                            out.flag.begin() + static_cast<std::ptrdiff_t>(offset + static_cast<std::size_t>(ne)));
     int count = 0;
-    const auto label = label_clusters(ref.grid, flags, &count);
+    ElementGrid grid = ref.grid;  // the patient's own seam (each subject's w_L is its own)
+    grid.seam_x = patient.grid.seam_x;
+    const auto label = label_clusters(grid, flags, &count);
     std::vector<ElementCluster> clusters(static_cast<std::size_t>(count));
     for (int e = 0; e < ne; ++e) {
       const int l = label[static_cast<std::size_t>(e)];

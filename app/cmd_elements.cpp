@@ -93,9 +93,12 @@ int run_elements(const ElementsArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   io::check_file_roles({a.surface, a.map, a.values}, analysis::element_output_paths(a.prefix).all());
   const analysis::ElementDomain domain = analysis::parse_element_domain(a.domain);
-  const analysis::ElementGrid grid = analysis::element_grid(domain, a.k);
+  analysis::ElementGrid grid = analysis::element_grid(domain, a.k);
   const io::Surface surface = io::read_surface(a.surface);
   const io::Surface map = io::read_surface(a.map);
+  // Where a two-hemisphere rectangle's parts meet, as `rectangle` recorded it (older maps: x = 1).
+  if (const auto seam = map.metadata.find(analysis::kSeamKey); domain == analysis::ElementDomain::Rectangle && seam != map.metadata.end())
+    grid.seam_x = analysis::parse_seam(seam->second, a.map);
   const VectorXd values = io::read_per_vertex(a.values, surface.mesh.num_vertices());
   const auto meta = func_metadata(a.values);
 

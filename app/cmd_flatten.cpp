@@ -33,7 +33,7 @@ struct FlattenArgs {
   std::string method = "grid";
   int k = 32;
   int grid = 512;
-  int passes = 3;
+  int passes = FlowOptions{}.max_passes;
   int fixed_steps = 0;
   int iterations = 200;
   bool no_polish = false;

@@ -11,6 +11,7 @@
 #include <tuple>
 
 #include "analysis/cortex_region.h"
+#include "analysis/elements.h"
 #include "analysis/render.h"
 #include "analysis/report.h"
 #include "app/command.h"
@@ -241,11 +242,16 @@ void finish(const RectangleArgs& a, const std::vector<const RectanglePart*>& par
   }
 }
 
-io::SurfaceWriteOptions flat_options(const std::string& structure, const std::string& what, const std::string& problem) {
+// seam_x: where the two hemispheres' parts meet (x in the [0, 2] rectangle), or "none" for one
+// surface; `elements` reads it so that clusters do not cross the seam (analysis::same_part).
+io::SurfaceWriteOptions flat_options(const std::string& structure, const std::string& what, const std::string& problem,
+                                     const std::string& seam_x) {
   io::SurfaceWriteOptions wo;
   wo.geometric_type = "Flat";
   wo.anatomical_structure = structure;
-  wo.metadata = {{"authalic_map", what}, {"authalic_acceptance", problem.empty() ? "passed" : "FAILED: " + problem}};
+  wo.metadata = {{"authalic_map", what},
+                 {"authalic_acceptance", problem.empty() ? "passed" : "FAILED: " + problem},
+                 {analysis::kSeamKey, seam_x}};
   return wo;
 }
 
@@ -273,11 +279,11 @@ void run_one_surface(const RectangleArgs& a) {
   const std::string& problem = checked.problem;
   const std::string structure = s.metadata.count("AnatomicalStructurePrimary") ? s.metadata.at("AnatomicalStructurePrimary") : "";
   const SurfaceOutputs names = surface_outputs(a);
-  io::write_surface(names.map, as_flat_mesh(r.map.UV, r.map.F), flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)", problem));
+  io::write_surface(names.map, as_flat_mesh(r.map.UV, r.map.F), flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)", problem, "none"));
   if (a.flat) {
     // 1 mm^2 of flat map = 1 mm^2 of cortex: the rectangle (area 2) scaled by sqrt(area / 2).
     io::write_surface(names.flat, as_flat_mesh(r.map.UV, r.map.F, std::sqrt(r.map.area_mm2 / 2.0)),
-                      flat_options(structure, "rectangle scaled to the cortical area (mm)", problem));
+                      flat_options(structure, "rectangle scaled to the cortical area (mm)", problem, "none"));
   }
   if (a.cut_surface) {
     io::SurfaceWriteOptions wo;
@@ -320,12 +326,13 @@ void run_two_hemispheres(const RectangleArgs& a) {
   const std::string& problem = checked.problem;
   const SurfaceOutputs names = surface_outputs(a);
   const std::string &lpath = names.lh, &rpath = names.rh;
-  io::write_surface(lpath, as_flat_mesh(r.left.UV, r.left.F), flat_options("CortexLeft", "rectangle [0,2]x[0,1], left part", problem));
-  io::write_surface(rpath, as_flat_mesh(r.right.UV, r.right.F), flat_options("CortexRight", "rectangle [0,2]x[0,1], right part", problem));
+  const std::string seam = analysis::seam_text(r.split);
+  io::write_surface(lpath, as_flat_mesh(r.left.UV, r.left.F), flat_options("CortexLeft", "rectangle [0,2]x[0,1], left part", problem, seam));
+  io::write_surface(rpath, as_flat_mesh(r.right.UV, r.right.F), flat_options("CortexRight", "rectangle [0,2]x[0,1], right part", problem, seam));
   if (a.flat) {
     const double scale = std::sqrt((r.left.area_mm2 + r.right.area_mm2) / 2.0);
-    io::write_surface(names.lh_flat, as_flat_mesh(r.left.UV, r.left.F, scale), flat_options("CortexLeft", "rectangle scaled to the cortical area (mm)", problem));
-    io::write_surface(names.rh_flat, as_flat_mesh(r.right.UV, r.right.F, scale), flat_options("CortexRight", "rectangle scaled to the cortical area (mm)", problem));
+    io::write_surface(names.lh_flat, as_flat_mesh(r.left.UV, r.left.F, scale), flat_options("CortexLeft", "rectangle scaled to the cortical area (mm)", problem, seam));
+    io::write_surface(names.rh_flat, as_flat_mesh(r.right.UV, r.right.F, scale), flat_options("CortexRight", "rectangle scaled to the cortical area (mm)", problem, seam));
   }
   auto shading = [&](const io::Surface& s, const std::string& sulc) -> VectorXd {
     if (a.png.empty()) return VectorXd::Zero(s.mesh.num_vertices());

@@ -42,9 +42,17 @@ inline SphereFlowOptions coarse_sphere_flow_options() {
   return o;
 }
 
+// B's square map: up to 6 grid passes (the sphere route was measured with them; its pial element
+// CV sits near its bar, so it keeps them).
+inline SquareMapOptions sphere_square_options() {
+  SquareMapOptions o;
+  o.flow.max_passes = 6;
+  return o;
+}
+
 struct SphereFromSquareOptions {
   double cap_fraction = 0.1;   // share of the surface area in the cap C
-  SquareMapOptions square;     // for B (orientation rules are switched off: the input is outward)
+  SquareMapOptions square = sphere_square_options();  // for B (orientation rules are switched off: the input is outward)
   StretchEnergyOptions cap = cap_stretch_options();  // for C (the boundary is always held)
   CrushedPatchOptions crushed;  // patches the parts' maps crushed, opened on the joined sphere
   SphereFlowOptions sphere_flow = coarse_sphere_flow_options();  // then on the whole sphere

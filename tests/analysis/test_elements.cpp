@@ -214,6 +214,25 @@ TEST(Elements, TableRoundTripAndCorruptFilesAreRefused) {
         EXPECT_EQ(x.value, y.value);
       }
     }
+  // The same table as TSV (what `run` writes): tab-separated, the same values read back; a
+  // rectangle table keeps its seam.
+  write_element_table(dir + "/t.tsv", t);
+  {
+    std::ifstream in(dir + "/t.tsv");
+    std::string header;
+    std::getline(in, header);
+    EXPECT_EQ(header, "id\themisphere\trow\tcol\tarea_mm2\tcentroid_x_mm\tcentroid_y_mm\tcentroid_z_mm\tvalue\tn_vertices");
+  }
+  const ElementTable w = read_element_table(dir + "/t.tsv");
+  for (std::size_t b = 0; b < 2; ++b)
+    for (std::size_t i = 0; i < 16; ++i) EXPECT_EQ(w.blocks[b].elements[i].area_mm2, u.blocks[b].elements[i].area_mm2);
+  ElementTable rect;
+  rect.grid = element_grid(ElementDomain::Rectangle, 2);
+  rect.grid.seam_x = 1.25;
+  rect.blocks = {{"both", std::vector<Element>(8)}};
+  for (int e = 0; e < 8; ++e) rect.blocks[0].elements[static_cast<std::size_t>(e)] = Element{e, e / 4, e % 4};
+  write_element_table(dir + "/r.tsv", rect);
+  EXPECT_EQ(read_element_table(dir + "/r.tsv").grid.seam_x, 1.25);
   // Corruptions: a bad number, a missing row, a missing sidecar.
   std::string csv;
   {

@@ -318,6 +318,19 @@ TEST(Normative, ClustersFollowTheDomainsNeighbourhoods) {
   EXPECT_EQ(count, 2);  // {3, 4, (2,5)} across longitude; {0, 7} wrapping around
   EXPECT_EQ(sphere[11], sphere[12]);
   EXPECT_EQ(sphere[8], sphere[15]);
+  // Unequal hemispheres (w_L = 1.5): columns 0-5 (centres up to 1.375) are the left part, so 3, 4
+  // and 5 join and the seam runs between columns 5 and 6; a one-surface rectangle has no seam.
+  std::vector<int> run(32, 0);
+  for (int c = 3; c <= 6; ++c) run[1 * 8 + c] = -1;
+  ElementGrid wide = element_grid(ElementDomain::Rectangle, 4);
+  wide.seam_x = 1.5;
+  const auto unequal = label_clusters(wide, run, &count);
+  EXPECT_EQ(count, 2);
+  EXPECT_EQ(unequal[11], unequal[13]);
+  EXPECT_NE(unequal[13], unequal[14]);
+  wide.seam_x = std::nan("");
+  label_clusters(wide, run, &count);
+  EXPECT_EQ(count, 1);
   // Opposite signs never join.
   std::vector<int> mixed(16, 0);
   mixed[0] = -1;

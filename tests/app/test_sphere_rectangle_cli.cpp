@@ -237,6 +237,16 @@ TEST(RectangleCli, TwoHemispheresFillTheRectangleMirrorSymmetric) {
   EXPECT_NEAR(covered_area(r.mesh.V, r.mesh.F), 1.0, 1e-4);
   EXPECT_NEAR(l.mesh.V.col(0).maxCoeff(), 1.0, 1e-6);
   EXPECT_NEAR(r.mesh.V.col(0).minCoeff(), 1.0, 1e-6);
+  // Each part records where the parts meet, and `elements` carries it into the table, whose
+  // clusters then do not cross it (issue 19: the seam is at w_L, not at column K).
+  EXPECT_NEAR(std::stod(l.metadata.at("authalic_seam_x")), j.at("split_x").get<double>(), 1e-12);
+  AUTHALIC_REQUIRE_SHARED(thick, "fsaverage5/thick_left.gii.gz");
+  ASSERT_EQ(run_command(authalic_binary() + " elements " + white + " " + dir + "/brain.lh.surf.gii " + thick + " " + dir +
+                            "/el --domain rectangle -q",
+                        &output),
+            0)
+      << output;
+  EXPECT_NEAR(read_json(dir + "/el.json").at("seam_x").get<double>(), j.at("split_x").get<double>(), 1e-12);
   // Mirror symmetry: the right part is the left one reflected about x = 1.
   ASSERT_EQ(l.mesh.num_vertices(), r.mesh.num_vertices());
   for (int v = 0; v < l.mesh.num_vertices(); ++v) {
