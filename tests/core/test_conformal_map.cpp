@@ -166,21 +166,34 @@ TEST(ConformalMap, EarAndStripTrianglesAreSplitWithoutDegenerateTriangles) {
   expect_valid_map(d, strip, "strip, default");
 }
 
-TEST(ConformalMap, EarOnTheGridBoundaryIsSplit) {
-  // The square grid with one extra triangle hanging below the bottom side: its three vertices are
-  // consecutive boundary vertices on one side, an ear (Zou et al. 2011, section 4.1).
+namespace {
+
+// The 6 x 6 square grid with one extra triangle hanging below the bottom side: its three vertices
+// are consecutive boundary vertices on one side, an ear (Zou et al. 2011, section 4.1). Bottom-row
+// vertices 3 (x = 0.5) and 4 (x = 0.667): the grid's faces run 3 -> 4, so the ear (counter-
+// clockwise) runs 4 -> 3; its tip is the last vertex, at (tip_x, -0.05).
+TriMesh grid_with_ear(double tip_x) {
   TriMesh m = test::square_grid(6);
   const int nv = m.num_vertices();
   m.V.conservativeResize(nv + 1, 3);
-  m.V.row(nv) << 0.5, -0.05, 0.0;
+  m.V.row(nv) << tip_x, -0.05, 0.0;
   m.F.conservativeResize(m.F.rows() + 1, 3);
-  // Bottom-row vertices 3 (x = 0.5) and 4 (x = 0.667): the grid's faces run 3 -> 4, so the ear
-  // (counter-clockwise) runs 4 -> 3.
   m.F.row(m.F.rows() - 1) << 4, 3, nv;
+  return m;
+}
+
+ConformalMapResult map_from_corner(const TriMesh& m, bool flip) {
   RectangleBoundaryMap opt;
   opt.anchor_vertex = 0;
-  opt.flip_dividing_edges = false;
-  const ConformalMapResult r = conformal_rectangle_map(m.V, m.F, opt);
+  opt.flip_dividing_edges = flip;
+  return conformal_rectangle_map(m.V, m.F, opt);
+}
+
+}  // namespace
+
+TEST(ConformalMap, EarOnTheGridBoundaryIsSplit) {
+  const TriMesh m = grid_with_ear(0.5);
+  const ConformalMapResult r = map_from_corner(m, false);
   EXPECT_GE(r.edges_split, 1);
   expect_valid_map(r, m, "ear");
 }
@@ -188,23 +201,17 @@ TEST(ConformalMap, EarOnTheGridBoundaryIsSplit) {
 TEST(ConformalMap, EarOnTheGridBoundaryIsFlippedKeepingTheInputsVertices) {
   // The same ear, default options: its interior edge 3-4 becomes the edge from the ear's tip to the
   // grid vertex above, so the map has the input's vertices (per-vertex files pair with it).
-  TriMesh m = test::square_grid(6);
+  const TriMesh m = grid_with_ear(0.5);
   const int nv = m.num_vertices();
-  m.V.conservativeResize(nv + 1, 3);
-  m.V.row(nv) << 0.5, -0.05, 0.0;
-  m.F.conservativeResize(m.F.rows() + 1, 3);
-  m.F.row(m.F.rows() - 1) << 4, 3, nv;
-  RectangleBoundaryMap opt;
-  opt.anchor_vertex = 0;
-  const ConformalMapResult r = conformal_rectangle_map(m.V, m.F, opt);
+  const ConformalMapResult r = map_from_corner(m, true);
   EXPECT_EQ(r.edges_flipped, 1);
   EXPECT_EQ(r.edges_split, 0);
-  EXPECT_EQ(r.V.rows(), nv + 1);
-  const EdgeTopology t = edge_topology(r.F, nv + 1);
+  EXPECT_EQ(r.V.rows(), nv);
+  const EdgeTopology t = edge_topology(r.F, nv);
   bool has_3_4 = false, has_tip_edge = false;
   for (Eigen::Index e = 0; e < t.E.rows(); ++e) {
     has_3_4 = has_3_4 || (t.E(e, 0) == 3 && t.E(e, 1) == 4);
-    has_tip_edge = has_tip_edge || (t.E(e, 1) == nv && t.edge_faces[e].size() == 2);
+    has_tip_edge = has_tip_edge || (t.E(e, 1) == nv - 1 && t.edge_faces[e].size() == 2);
   }
   EXPECT_FALSE(has_3_4);
   EXPECT_TRUE(has_tip_edge) << "the ear's tip now has an interior edge";
@@ -214,23 +221,17 @@ TEST(ConformalMap, EarOnTheGridBoundaryIsFlippedKeepingTheInputsVertices) {
 TEST(ConformalMap, EarWhoseFlipWouldBeFlatIn3dIsSplit) {
   // The ear's tip straight below the grid vertex across its interior edge: one triangle of the
   // flip would have three collinear 3D vertices (no area to map), so the edge is split instead.
-  TriMesh m = test::square_grid(6);
-  const int nv = m.num_vertices();
+  const TriMesh grid = test::square_grid(6);
   int across = -1;  // the third vertex of the grid face on the edge 3-4
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+  for (Eigen::Index f = 0; f < grid.F.rows(); ++f)
     for (int c = 0; c < 3; ++c)
-      if (m.F(f, c) == 3 && m.F(f, (c + 1) % 3) == 4) across = m.F(f, (c + 2) % 3);
+      if (grid.F(f, c) == 3 && grid.F(f, (c + 1) % 3) == 4) across = grid.F(f, (c + 2) % 3);
   ASSERT_GE(across, 0);
-  m.V.conservativeResize(nv + 1, 3);
-  m.V.row(nv) << m.V(across, 0), -0.05, 0.0;
-  m.F.conservativeResize(m.F.rows() + 1, 3);
-  m.F.row(m.F.rows() - 1) << 4, 3, nv;
-  RectangleBoundaryMap opt;
-  opt.anchor_vertex = 0;
-  const ConformalMapResult r = conformal_rectangle_map(m.V, m.F, opt);
+  const TriMesh m = grid_with_ear(grid.V(across, 0));
+  const ConformalMapResult r = map_from_corner(m, true);
   EXPECT_EQ(r.edges_flipped, 0);
   EXPECT_EQ(r.edges_split, 1);
-  EXPECT_EQ(r.V.rows(), nv + 2);
+  EXPECT_EQ(r.V.rows(), m.num_vertices() + 1);
   expect_valid_map(r, m, "ear with a flat flip");
 }
 
