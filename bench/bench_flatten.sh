@@ -5,8 +5,8 @@
 #         B2 = the same on pial_left, B3 = B1 subdivided twice (midpoint; B1's vertices first).
 # Beside them: the DLF mesh flow (adaptive flip-preventing step) on B1, the conformal initial maps,
 # and FreeSurfer's own flat map. Every map is also measured by ../shared/tools/evalmap.py
-# (independent, nibabel), which skips faces on inserted (ear-split) vertices and counts element
-# areas by Monte Carlo (4M samples): its CV has a sampling floor of about 0.007 of its own.
+# (independent, nibabel; exact element areas). The maps have the input's vertices (dividing edges
+# are flipped, not split), so both measure the same faces.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}

@@ -133,7 +133,7 @@ cvs = re.findall(r"element-area CV ([0-9.e-]+)", open(log).read()) if os.path.ex
 report = os.path.exists(os.path.join(work, "run", "sub-fs741", "sub-fs741_report.html"))
 print(f"\nrun on the subject (left + mirror, SPM PET): exit {code}, {wall:.1f} s wall, {cpu:.1f} s cpu, {rss:.0f} MB, "
       f"report {'written' if report else 'missing'}; element CV left/right square, rectangle (64x32): {', '.join(cvs) or '-'}")
-reqs += [("run exit code", code, 0), ("run wall s", wall, 60.0), ("run report written", 0 if report else 1, 0)]
+reqs += [("run exit code", code, 0), ("run wall s", wall, 60.0), ("run report missing (1 = missing)", 0 if report else 1, 0)]
 if len(cvs) == 3:
     reqs += [("rectangle (two hemispheres) element CV", float(cvs[2]), 0.005)]
 print(f"\nload average (1, 5, 15 min) at the start: {sys.argv[2]}, at the end: {' '.join(open('/proc/loadavg').read().split()[:3])} "

@@ -52,10 +52,17 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   ASSERT_TRUE(std::regex_search(main_job, out, std::regex("--out\\s+(\\S+)")));
   ASSERT_TRUE(std::regex_search(main_job, id, std::regex("--id\\s+(\\S+)")));
   const fs::path root(AUTHALIC_SOURCE_DIR);
-  ASSERT_TRUE(fs::exists(root / "build/authalic")) << "build/authalic is missing: run the README's first line first";
-  const fs::path report = root / out[1].str() / ("sub-" + id[1].str()) / ("sub-" + id[1].str() + "_report.html");
+  // The job as written, run from the source tree with the binary under test (so a sanitizer build
+  // tests itself, not the Release build/authalic) into a fresh --out.
+  std::string job = main_job;
+  const std::string exe = "build/authalic";
+  ASSERT_NE(job.find(exe), std::string::npos);
+  job.replace(job.find(exe), exe.size(), authalic::test::authalic_binary());
+  const fs::path out_root = authalic::test::temp_dir("readme_main_job");
+  job = std::regex_replace(job, std::regex("--out\\s+\\S+"), "--out '" + out_root.string() + "'");
+  const fs::path report = out_root / ("sub-" + id[1].str()) / ("sub-" + id[1].str() + "_report.html");
   std::string output;
-  const int rc = authalic::test::run_command("cd '" + root.string() + "' && " + main_job + " --quiet", &output);
+  const int rc = authalic::test::run_command("cd '" + root.string() + "' && " + job + " --quiet", &output);
   ASSERT_EQ(rc, 0) << output;
   ASSERT_TRUE(fs::exists(report)) << report;
   std::ifstream in(report);
@@ -67,16 +74,16 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
 
   // Provenance (issue 15 items 5 and 9): the output folder is a BIDS derivative dataset, and each
   // sidecar records the command line as run and the inputs by the path given, with checksums.
-  std::ifstream dd(root / out[1].str() / "dataset_description.json");
+  std::ifstream dd(out_root / "dataset_description.json");
   ASSERT_TRUE(dd.good());
   const auto d = nlohmann::json::parse(dd);
   EXPECT_EQ(d.at("DatasetType"), "derivative");
   EXPECT_FALSE(d.at("BIDSVersion").get<std::string>().empty());
   EXPECT_EQ(d.at("GeneratedBy").at(0).at("Name"), "authalic");
-  std::ifstream sc(root / out[1].str() / ("sub-" + id[1].str()) / ("sub-" + id[1].str() + "_hemi-L_desc-elements_zscore.json"));
+  std::ifstream sc(out_root / ("sub-" + id[1].str()) / ("sub-" + id[1].str() + "_hemi-L_desc-elements_zscore.json"));
   ASSERT_TRUE(sc.good());
   const auto j = nlohmann::json::parse(sc);
-  EXPECT_NE(j.at("command_line").get<std::string>().find("build/authalic run --id " + id[1].str()), std::string::npos) << j.dump(1);
+  EXPECT_NE(j.at("command_line").get<std::string>().find(authalic::test::authalic_binary() + " run --id " + id[1].str()), std::string::npos) << j.dump(1);
   std::smatch pet;
   ASSERT_TRUE(std::regex_search(main_job, pet, std::regex("--pet\\s+(\\S+)")));
   EXPECT_EQ(j.at("inputs").at("pet").at("path"), pet[1].str());
@@ -85,7 +92,7 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
 
   // Issue 15 item 6: beside the HTML, the clusters as TSV (with a sidecar describing its columns),
   // and per hemisphere the per-vertex z and element label, on the input's vertices.
-  const fs::path subject = root / out[1].str() / ("sub-" + id[1].str());
+  const fs::path subject = out_root / ("sub-" + id[1].str());
   const std::string stem = "sub-" + id[1].str();
   std::ifstream tsv(subject / (stem + "_clusters.tsv"));
   std::string header, first;
