@@ -557,6 +557,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
       rflat.F = part.F;
       io::SurfaceWriteOptions ro = wo;
       ro.metadata["space"] = "authalic whole-brain 2:1 rectangle scaled to the cortical area of both hemispheres (mm)";
+      ro.metadata[kSeamKey] = seam_text(rect.split);  // in [0, 2] units, as `rectangle` records it
       const std::string rect_name = names.rectangle_flat(h.tag);
       io::write_surface((stage / rect_name).string(), rflat, ro);
       if (rflat.num_vertices() == h.white.mesh.num_vertices()) spec.push_back({wo.anatomical_structure, "SURFACE", rect_name});

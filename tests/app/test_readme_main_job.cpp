@@ -7,12 +7,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <regex>
 #include <sstream>
 
 #include "common/test_data.h"
+#include "core/mesh.h"
 #include "io/surface_io.h"
 
 namespace fs = std::filesystem;
@@ -128,6 +130,14 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   }
   EXPECT_GE(files, 40);
   EXPECT_TRUE(fs::exists(subject / (stem + "_elements.tsv")));
+  // The rectangle part records where the hemispheres meet (issue 19: the seam is w_L, not x = 1).
+  const auto rect_part = authalic::io::read_surface((subject / (stem + "_hemi-L_space-authalicrect_flat.surf.gii")).string());
+  const double seam = std::stod(rect_part.metadata.at("authalic_seam_x"));
+  EXPECT_GT(seam, 0.5);
+  EXPECT_LT(seam, 1.5);
+  // The left part is [0, w_L] x [0, 1] scaled by s, so its area is w_L s^2 and its width w_L s.
+  const double s = std::sqrt(authalic::face_areas(rect_part.mesh.V, rect_part.mesh.F).sum() / seam);
+  EXPECT_NEAR(rect_part.mesh.V.col(0).maxCoeff() / s, seam, 0.01 * seam) << "the left part spans [0, w_L]";
   EXPECT_TRUE(fs::exists(subject / (stem + "_log.txt")));
 
   // Issue 15 item 7: a Workbench spec per subject names the surfaces and the per-vertex files on
