@@ -44,6 +44,13 @@ Eigen::Vector3d row3(const MatrixXd& V, int i) { return V.row(i).head<3>().trans
 
 using Face = std::array<int, 3>;
 
+double tri_area(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
+  return 0.5 * (q - p).cross(r - p).norm();
+}
+// A flipped pair's triangles each keep at least this share of the pair's 3D area: a flat one would
+// have to map to a sliver.
+constexpr double kMinFlipAreaShare = 1e-3;
+
 // Dividing edges resolved by edge flips, which keep the vertex list (splitting them appends vertices
 // that the surface's per-vertex data does not have, so the flat map would not pair with it).
 // A dividing edge (a, c) -- interior, its endpoints on one side -- between faces (a, c, x) and
@@ -53,13 +60,6 @@ using Face = std::array<int, 3>;
 // than the pair's: the map is authalic for the faces it returns, which is what its checks measure.
 // Faces touched by a flip wait for the next round; whatever is left is split by stage 2. F and
 // origin (face -> input face) are updated in place.
-double tri_area(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
-  return 0.5 * (q - p).cross(r - p).norm();
-}
-// A flipped pair's triangles each keep at least this share of the pair's 3D area: a flat one would
-// have to map to a sliver.
-constexpr double kMinFlipAreaShare = 1e-3;
-
 int flip_dividing_edges(const std::vector<Eigen::Vector3d>& pos, const std::vector<int>& mask, MatrixXi& F,
                         std::vector<int>& origin) {
   const int n = static_cast<int>(pos.size());
@@ -108,6 +108,7 @@ int flip_dividing_edges(const std::vector<Eigen::Vector3d>& pos, const std::vect
       ++this_round;
     }
     flipped += this_round;
+    // Another round: an edge passed over this round may have had a face changed by a later flip.
     if (this_round == 0) break;
   }
   return flipped;
