@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/square_map.h"
 #include "io/atomic_file.h"
 
 namespace authalic::app {
@@ -69,8 +70,8 @@ std::string inserted_vertices_text(const MatrixXi& parents, const VectorXd& weig
 }
 
 MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int count, const std::string& path) {
-  MatrixXd out(V.rows() + count, 3);
-  out.topRows(V.rows()) = V;
+  MatrixXi parents(count, 2);
+  VectorXd weight(count);
   std::istringstream in(text);
   std::string item;
   int k = 0;
@@ -85,13 +86,14 @@ MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int
       throw InputError(path + ": metadata " + kInsertedVerticesKey + " entry " + std::to_string(k + 1) + " ('" + item +
                        "') is not 'parent parent weight' for inserted vertex " + std::to_string(self) +
                        "; the file was changed after authalic wrote it");
-    out.row(self) = (1 - w) * out.row(p0) + w * out.row(p1);
+    parents.row(k) << static_cast<int>(p0), static_cast<int>(p1);
+    weight[k] = w;
     ++k;
   }
   if (k != count)
     throw InputError(path + ": metadata " + kInsertedVerticesKey + " describes " + std::to_string(k) + " inserted vertices but the map has " +
                      std::to_string(count) + "; the file was changed after authalic wrote it");
-  return out;
+  return extend_to_inserted(V.leftCols(3), parents, weight);  // the flattening's own rule
 }
 
 }  // namespace authalic::app

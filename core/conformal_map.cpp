@@ -58,14 +58,14 @@ constexpr double kMinFlipAreaShare = 1e-3;
 // triangles have a 3D area. A convex quad gives a triangulation of the same surface piece; a
 // non-convex one (real meshes have a few) gives two triangles whose 3D areas sum to a little more
 // than the pair's: the map is authalic for the faces it returns, which is what its checks measure.
-// Faces touched by a flip wait for the next round; whatever is left is split by stage 2. F and
-// origin (face -> input face) are updated in place.
+// Faces touched by a flip wait for the next round; whatever is left is split by stage 2. F,
+// origin (face -> input face) and topo (edge_topology of F, given and returned current) are
+// updated in place.
 int flip_dividing_edges(const std::vector<Eigen::Vector3d>& pos, const std::vector<int>& mask, MatrixXi& F,
-                        std::vector<int>& origin) {
+                        std::vector<int>& origin, EdgeTopology& topo) {
   const int n = static_cast<int>(pos.size());
   int flipped = 0;
   for (int round = 0; round < 4; ++round) {
-    const EdgeTopology topo = edge_topology(F, n);
     std::vector<std::vector<int>> adj(n);
     for (Eigen::Index e = 0; e < topo.E.rows(); ++e) {
       adj[topo.E(e, 0)].push_back(topo.E(e, 1));
@@ -108,8 +108,9 @@ int flip_dividing_edges(const std::vector<Eigen::Vector3d>& pos, const std::vect
       ++this_round;
     }
     flipped += this_round;
-    // Another round: an edge passed over this round may have had a face changed by a later flip.
     if (this_round == 0) break;
+    // Another round: an edge passed over this round may have had a face changed by a later flip.
+    topo = edge_topology(F, n);
   }
   return flipped;
 }
@@ -455,10 +456,10 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
   std::vector<Eigen::Vector3d> all_pos(n1);
   for (int v = 0; v < nv; ++v) all_pos[v] = row3(V, v);
   for (size_t k = 0; k < extra.size(); ++k) all_pos[nv + k] = extra[k];
-  if (opt.flip_dividing_edges) R.edges_flipped = flip_dividing_edges(all_pos, mask, F1, origin1);
+  EdgeTopology topo1 = edge_topology(F1, n1);
+  if (opt.flip_dividing_edges) R.edges_flipped = flip_dividing_edges(all_pos, mask, F1, origin1, topo1);
 
   // Stage 2 (ear splits): interior edges whose endpoints share a side.
-  const EdgeTopology topo1 = edge_topology(F1, n1);
   std::vector<int> mid(topo1.E.rows(), -1);
   for (Eigen::Index e = 0; e < topo1.E.rows(); ++e) {
     const int a = topo1.E(e, 0), b = topo1.E(e, 1);

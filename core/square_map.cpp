@@ -51,15 +51,19 @@ std::string region_geometry_problem(const MatrixXd& V, const MatrixXi& F) {
   return {};
 }
 
-MatrixXd extend_to_inserted(const MatrixXd& values, const ConformalMapResult& initial) {
-  const Eigen::Index n0 = initial.num_input_vertices, k = initial.inserted_parents.rows();
+MatrixXd extend_to_inserted(const MatrixXd& values, const MatrixXi& parents, const VectorXd& weight) {
+  const Eigen::Index n0 = values.rows(), k = parents.rows();
   MatrixXd out(n0 + k, values.cols());
-  out.topRows(n0) = values.topRows(n0);
+  out.topRows(n0) = values;
   for (Eigen::Index i = 0; i < k; ++i) {
-    const double w = initial.inserted_weight[i];
-    out.row(n0 + i) = (1 - w) * out.row(initial.inserted_parents(i, 0)) + w * out.row(initial.inserted_parents(i, 1));
+    const double w = weight[i];
+    out.row(n0 + i) = (1 - w) * out.row(parents(i, 0)) + w * out.row(parents(i, 1));
   }
   return out;
+}
+
+MatrixXd extend_to_inserted(const MatrixXd& values, const ConformalMapResult& initial) {
+  return extend_to_inserted(values.topRows(initial.num_input_vertices), initial.inserted_parents, initial.inserted_weight);
 }
 
 namespace {

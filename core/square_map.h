@@ -82,6 +82,9 @@ std::string region_geometry_problem(const MatrixXd& V, const MatrixXi& F);
 SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F, const SquareMapOptions& options,
                            const ProgressFn& progress = {});
 
+// Per-vertex data extended to vertices inserted on edges: row n + i = (1 - w_i) row p0 + w_i row p1,
+// (p0, p1) = parents.row(i), in order (a parent may be an earlier inserted vertex). values: n x k.
+MatrixXd extend_to_inserted(const MatrixXd& values, const MatrixXi& parents, const VectorXd& weight);
 // Per-vertex data of the input extended to the inserted vertices (interpolated like their
 // positions). values: #num_input_vertices x k.
 MatrixXd extend_to_inserted(const MatrixXd& values, const ConformalMapResult& initial);
