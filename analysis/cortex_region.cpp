@@ -21,10 +21,11 @@ CortexRegion read_cortex_region(const TriMesh& white, const std::string& white_p
       throw InputError(cortex_path + ": has " + std::to_string(file.face_set_vertices) + " vertices but " + white_path + " has " +
                        std::to_string(n) + "; a cortex face set must be on the white surface's vertices");
     region.F = file.faces;
-    const TopologyReport t = analyze_topology(white.V, region.F);
-    if (!t.is_disk())
-      throw InputError(cortex_path + ": the cortex region on " + white_path + " is not one disk (" + t.summary() +
-                       "); the map needs a region with one boundary loop, e.g. FreeSurfer's ?h.cortex.label");
+    try {
+      region.topology = require_disk(white.V, region.F, cortex_path + ": the cortex region on " + white_path);
+    } catch (const InputError& e) {
+      throw InputError(std::string(e.what()) + "; e.g. FreeSurfer's ?h.cortex.label is one");
+    }
     return region;
   }
   std::vector<bool> in(static_cast<std::size_t>(n), false);
@@ -37,6 +38,7 @@ CortexRegion read_cortex_region(const TriMesh& white, const std::string& white_p
     throw InputError(cortex_path + " on " + white_path + ": " + c.problem() +
                      "; the map needs a region with one boundary loop, e.g. FreeSurfer's ?h.cortex.label");
   region.F = c.F;
+  region.topology = c.topology;
   std::ostringstream line;
   line << name << " cortex " << std::filesystem::path(cortex_path).filename().string() << ": " << file.vertices.size()
        << " label vertices, " << c.F.rows() << " faces, " << std::fixed << std::setprecision(1) << c.area_mm2 << " mm^2; "

@@ -16,6 +16,7 @@ namespace authalic::analysis {
 
 struct CortexRegion {
   MatrixXi F;        // faces of the white surface inside the region
+  TopologyReport topology;  // of F: one oriented disk (core/mesh.h require_disk), for the map not to check again
   std::string note;  // a label's clean-up ("<name> cortex <file>: N label vertices, ... mm^2; ..."); empty for a face set
 };
 

@@ -148,29 +148,13 @@ void trace_inserted_vertices(ElementMap& m, const MatrixXi& F_surface, const std
 
 }  // namespace
 
-std::string to_string(ElementDomain domain) {
-  switch (domain) {
-    case ElementDomain::Square: return "square";
-    case ElementDomain::Rectangle: return "rectangle";
-    case ElementDomain::Sphere: return "sphere";
-  }
-  return "square";
-}
-
-ElementDomain parse_element_domain(const std::string& name, const std::string& what) {
-  if (name == "square") return ElementDomain::Square;
-  if (name == "rectangle" || name == "rect") return ElementDomain::Rectangle;
-  if (name == "sphere") return ElementDomain::Sphere;
-  throw InputError(what + ": unknown domain '" + name + "'; use square, rectangle or sphere");
-}
-
-ElementGrid element_grid(ElementDomain domain, int k) {
+ElementGrid element_grid(const Domain& domain, int k) {
   if (k < 1 || k > 4096) throw InputError("--k: " + std::to_string(k) + " is out of range; use 1..4096");
   ElementGrid g;
   g.domain = domain;
   g.k = k;
-  g.rows = k;
-  g.cols = domain == ElementDomain::Square ? k : 2 * k;
+  g.rows = domain.element_rows(k);
+  g.cols = domain.element_cols(k);
   return g;
 }
 
@@ -190,12 +174,6 @@ double parse_seam(const std::string& text, const std::string& what) {
   return x;
 }
 
-bool same_part(const ElementGrid& grid, int c1, int c2) {
-  if (grid.domain != ElementDomain::Rectangle || !std::isfinite(grid.seam_x)) return true;
-  const auto left = [&](int c) { return (c + 0.5) / grid.k < grid.seam_x; };
-  return left(c1) == left(c2);
-}
-
 std::string hemisphere_of(const std::map<std::string, std::string>& metadata, const std::string& path) {
   const auto it = metadata.find("AnatomicalStructurePrimary");
   if (it != metadata.end()) {
@@ -210,24 +188,8 @@ std::string hemisphere_of(const std::map<std::string, std::string>& metadata, co
   return "unknown";
 }
 
-int element_of_point(const ElementGrid& grid, const double* p) {
-  double u, v;  // in [0,1]
-  if (grid.domain == ElementDomain::Sphere) {
-    const double r = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-    const double z = r > 0 ? p[2] / r : 0.0;
-    u = (std::atan2(p[1], p[0]) + M_PI) / (2 * M_PI);
-    v = (z + 1) / 2;
-  } else {
-    u = grid.domain == ElementDomain::Rectangle ? p[0] / 2.0 : p[0];
-    v = p[1];
-  }
-  const int col = std::clamp(static_cast<int>(std::floor(u * grid.cols)), 0, grid.cols - 1);
-  const int row = std::clamp(static_cast<int>(std::floor(v * grid.rows)), 0, grid.rows - 1);
-  return row * grid.cols + col;
-}
-
 ElementMap prepare_element_map(const MatrixXd& V, const MatrixXi& F, const MatrixXd& map_V, const MatrixXi& map_F,
-                               const VectorXd& values, ElementDomain domain, const std::string& map_name) {
+                               const VectorXd& values, const Domain& domain, const std::string& map_name) {
   const int nv = static_cast<int>(V.rows()), nm = static_cast<int>(map_V.rows());
   if (values.size() != nv)
     throw InputError("values: " + std::to_string(values.size()) + " values for a surface of " + std::to_string(nv) +
@@ -251,7 +213,7 @@ ElementMap prepare_element_map(const MatrixXd& V, const MatrixXi& F, const Matri
   for (int f = 0; f < map_F.rows(); ++f)
     for (int c = 0; c < 3; ++c) used[static_cast<std::size_t>(map_F(f, c))] = true;
 
-  if (domain == ElementDomain::Sphere) {
+  if (!domain.planar()) {
     if (map_V.cols() < 3) throw InputError(map_name + ": a sphere map needs x, y, z coordinates");
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     double mean_r = 0;
@@ -277,7 +239,7 @@ ElementMap prepare_element_map(const MatrixXd& V, const MatrixXi& F, const Matri
     if (worst > 0.01)
       m.notes.push_back("sphere map radii vary by up to " + fmt(100 * worst, 3) + "%; vertices were projected onto the unit sphere");
   } else {
-    const double W = domain == ElementDomain::Rectangle ? 2.0 : 1.0;
+    const double W = domain.width();
     if (map_V.cols() >= 3) {
       double zmax = 0, xy = 0;
       for (int v = 0; v < nm; ++v)
@@ -303,14 +265,14 @@ ElementMap prepare_element_map(const MatrixXd& V, const MatrixXi& F, const Matri
       const double aspect = (x1 - x0) / (y1 - y0);
       if (!(std::abs(aspect / W - 1) < 0.02))
         throw InputError(map_name + ": the map spans [" + fmt(x0) + ", " + fmt(x1) + "] x [" + fmt(y0) + ", " + fmt(y1) +
-                         "], which is not the " + to_string(domain) + " domain [0," + fmt(W) + "] x [0,1] (aspect " +
+                         "], which is not the " + to_string(domain.kind) + " domain [0," + fmt(W) + "] x [0,1] (aspect " +
                          fmt(aspect) + "); give the authalic map of this domain or choose --domain");
       for (int v = 0; v < nm; ++v) {
         m.D(v, 0) = (map_V(v, 0) - x0) / (x1 - x0) * W;
         m.D(v, 1) = (map_V(v, 1) - y0) / (y1 - y0);
       }
       m.notes.push_back("the map was rescaled from its bounding box [" + fmt(x0) + ", " + fmt(x1) + "] x [" + fmt(y0) + ", " +
-                        fmt(y1) + "] onto the " + to_string(domain) + " domain");
+                        fmt(y1) + "] onto the " + to_string(domain.kind) + " domain");
     }
   }
   trace_inserted_vertices(m, F, map_name);
@@ -319,20 +281,7 @@ ElementMap prepare_element_map(const MatrixXd& V, const MatrixXi& F, const Matri
 
 ElementResult compute_elements(const ElementMap& map, const ElementGrid& grid, const Eigen::Matrix4d& to_scanner) {
   const int ncell = grid.num_elements();
-  std::vector<OverlapPiece> pieces;
-  if (grid.domain == ElementDomain::Sphere) {
-    SphereGridSpec s;
-    s.sectors = grid.cols;
-    s.bands = grid.rows;
-    pieces = sphere_grid_overlap(map.D, map.F, s);
-  } else {
-    GridSpec g;
-    g.cols = grid.cols;
-    g.rows = grid.rows;
-    g.width = grid.domain == ElementDomain::Rectangle ? 2.0 : 1.0;
-    g.height = 1.0;
-    pieces = grid_overlap(map.D, map.F, g);
-  }
+  const std::vector<OverlapPiece> pieces = grid.domain.element_overlap(map.D, map.F, grid.k);
   const VectorXd area3d = face_areas(map.V3, map.F);
   const VectorXd area_domain = piece_face_areas(pieces, static_cast<int>(map.F.rows()));
 
@@ -378,7 +327,7 @@ ElementResult compute_elements(const ElementMap& map, const ElementGrid& grid, c
   for (int v = 0; v < nv; ++v) {
     if (!used[static_cast<std::size_t>(v)]) continue;
     double p[3] = {map.D(v, 0), map.D(v, 1), map.D.cols() > 2 ? map.D(v, 2) : 0.0};
-    const int c = element_of_point(grid, p);
+    const int c = grid.domain.element_of_point(grid.k, p);
     r.vertex_element(v) = c;
     ++r.block.elements[c].n_vertices;
   }
@@ -467,8 +416,8 @@ void write_element_table(const std::string& csv_path, const ElementTable& table)
   j["cols"] = table.grid.cols;
   j["hemispheres"] = nlohmann::json::array();
   for (const auto& b : table.blocks) j["hemispheres"].push_back(b.hemisphere);
-  if (table.grid.domain == ElementDomain::Rectangle)
-    j["seam_x"] = std::isfinite(table.grid.seam_x) ? nlohmann::json(table.grid.seam_x) : nlohmann::json(nullptr);
+  if (table.grid.domain.kind == DomainKind::Rectangle)
+    j["seam_x"] = std::isfinite(table.grid.domain.seam_x) ? nlohmann::json(table.grid.domain.seam_x) : nlohmann::json(nullptr);
   j["normalisation"] = table.normalisation;
   j["units"] = table.units;
   j["subject_id"] = table.subject_id;
@@ -516,17 +465,18 @@ ElementTable read_element_table(const std::string& csv_path, bool values_only) {
       if (version != 1)
         throw InputError(sidecar + ": element-table version " + std::to_string(version) +
                          " is not supported by this authalic (version 1); update authalic");
-      const ElementDomain domain = parse_element_domain(j.at("domain").get<std::string>(), sidecar + ": domain");
+      const Domain domain = Domain::of(parse_domain_kind(j.at("domain").get<std::string>(), sidecar + ": domain"));
       const int k = j.at("k").get<int>();
       if (k < 1 || k > 4096) throw InputError(sidecar + ": k = " + std::to_string(k) + " is outside 1..4096; the table's sidecar is corrupt");
       t.grid = element_grid(domain, k);
       if (j.at("rows").get<int>() != t.grid.rows || j.at("cols").get<int>() != t.grid.cols)
-        throw InputError(sidecar + ": rows/cols do not match domain " + to_string(domain) + " at k = " + std::to_string(t.grid.k));
+        throw InputError(sidecar + ": rows/cols do not match domain " + to_string(domain.kind) + " at k = " + std::to_string(t.grid.k));
       for (const auto& h : j.at("hemispheres")) t.blocks.push_back({h.get<std::string>(), {}});
-      if (domain == ElementDomain::Rectangle && j.contains("seam_x")) {  // older tables: 1
-        t.grid.seam_x = j["seam_x"].is_null() ? std::nan("") : j["seam_x"].get<double>();
-        if (std::isfinite(t.grid.seam_x) && !(t.grid.seam_x > 0 && t.grid.seam_x < 2))
-          throw InputError(sidecar + ": seam_x " + std::to_string(t.grid.seam_x) + " is outside (0, 2); the table's sidecar is corrupt");
+      if (domain.kind == DomainKind::Rectangle && j.contains("seam_x")) {  // older tables: 1
+        double& seam = t.grid.domain.seam_x;
+        seam = j["seam_x"].is_null() ? std::nan("") : j["seam_x"].get<double>();
+        if (std::isfinite(seam) && !(seam > 0 && seam < 2))
+          throw InputError(sidecar + ": seam_x " + std::to_string(seam) + " is outside (0, 2); the table's sidecar is corrupt");
       }
       t.normalisation = j.value("normalisation", "none");
       t.units = j.value("units", "");

@@ -1,5 +1,5 @@
 #pragma once
-// Equal-area cortical elements (Zou et al. 2011, `000_9f60545f35b9287a.txt` section 5.2, Fig. 5):
+// Equal-area cortical elements (Zou et al. 2011a section 5.2, Fig. 5):
 // the cells of a regular grid on the parametric domain of an authalic map, mapped back to the
 // cortex. On an authalic map every element holds the same cortical area, so per-element PET
 // values are comparable across elements and subjects.
@@ -25,39 +25,25 @@
 #include <string>
 #include <vector>
 
+#include "core/domain.h"
 #include "core/mesh.h"
 
 namespace authalic::analysis {
 
-enum class ElementDomain { Square, Rectangle, Sphere };
-std::string to_string(ElementDomain domain);  // "square", "rectangle", "sphere"
-// Parses "square" | "rectangle" | "sphere"; throws InputError naming `what` otherwise.
-ElementDomain parse_element_domain(const std::string& name, const std::string& what = "--domain");
-
-// The element grid of a domain at resolution K: square K x K on [0,1]^2; rectangle 2K x K on
-// [0,2] x [0,1] (whole brain, hemisphere seam at x = 1, i.e. between columns K-1 and K); sphere
-// 2K longitude sectors x K bands equal in z (equal area, Archimedes). Element id = row * cols + col,
-// row 0 at the bottom (y = 0, or z = -1 on the sphere), column 0 at x = 0 (longitude -pi).
+// The element grid of a domain at resolution K (core/domain.h: the grid, its cells, the seam of
+// a two-part rectangle and the cluster neighbour rule Domain::same_part).
 struct ElementGrid {
-  ElementDomain domain = ElementDomain::Square;
+  Domain domain;
   int k = 32;
   int rows = 32, cols = 32;
-  // Rectangle of two hemispheres: x where the left part ends and the right begins (w_L =
-  // 2 A_L / (A_L + A_R), core/rectangle_map.h); 1 when the parts are not known to differ, NaN for a
-  // one-surface rectangle (no seam). The hemispheres touch there only in the map (clusters do not
-  // cross it: same_part).
-  double seam_x = 1.0;
   int num_elements() const { return rows * cols; }
 };
-// The map-file metadata key that carries seam_x ("none" for one surface), and its text.
+// The map-file metadata key that carries Domain::seam_x ("none" for one surface), and its text.
 inline constexpr const char* kSeamKey = "authalic_seam_x";
 std::string seam_text(double seam_x);
 // seam_x from that metadata text (what: the file, for the error): "none" -> NaN; a number in (0, 2).
 double parse_seam(const std::string& text, const std::string& what);
-// Whether element columns c1 and c2 lie in the same hemisphere part of a two-part rectangle (by
-// their centres' side of seam_x); always true for other domains and a one-surface rectangle.
-bool same_part(const ElementGrid& grid, int c1, int c2);
-ElementGrid element_grid(ElementDomain domain, int k);
+ElementGrid element_grid(const Domain& domain, int k);
 
 struct Element {
   int id = 0, row = 0, col = 0;
@@ -105,7 +91,7 @@ struct ElementMap {
 // projected onto the unit sphere. Throws InputError (naming `map_name`) for a map that does not
 // fit the domain or the surface.
 ElementMap prepare_element_map(const MatrixXd& V, const MatrixXi& F, const MatrixXd& map_V, const MatrixXi& map_F,
-                               const VectorXd& values, ElementDomain domain, const std::string& map_name = "map");
+                               const VectorXd& values, const Domain& domain, const std::string& map_name = "map");
 
 struct ElementResult {
   ElementBlock block;
@@ -123,8 +109,6 @@ ElementResult compute_elements(const ElementMap& map, const ElementGrid& grid,
 // else the file name (lh.* / rh.*, *left* / *right*, hemi-L / hemi-R).
 std::string hemisphere_of(const std::map<std::string, std::string>& metadata, const std::string& path);
 
-// Element id of a domain point (clamped onto the domain's edges).
-int element_of_point(const ElementGrid& grid, const double* point);
 
 // ---- element tables on disk -------------------------------------------------------------
 

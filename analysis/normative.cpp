@@ -51,7 +51,7 @@ void check_shapes(const Shape& ref, const Shape& other, const std::string& what,
                      "; element tables and references can only be pooled or compared with the same domain, K, "
                      "hemispheres, intensity normalisation and units");
   };
-  if (ref.grid.domain != other.grid.domain) refuse("the domain", to_string(ref.grid.domain), to_string(other.grid.domain));
+  if (ref.grid.domain.kind != other.grid.domain.kind) refuse("the domain", to_string(ref.grid.domain), to_string(other.grid.domain));
   if (ref.grid.k != other.grid.k) refuse("K", std::to_string(ref.grid.k), std::to_string(other.grid.k));
   if (ref.hemispheres != other.hemispheres) refuse("the hemisphere list", join(ref.hemispheres), join(other.hemispheres));
   if (ref.normalisation != other.normalisation) refuse("the intensity normalisation", ref.normalisation, other.normalisation);
@@ -288,7 +288,7 @@ NormativeReference reference_from_json(const std::string& text, const std::strin
                        std::to_string(kNormativeFormatVersion) + "); rebuild the reference with this version");
     const int k = j.at("k").get<int>();
     if (k < 1 || k > 4096) throw InputError(path + ": k = " + std::to_string(k) + " is outside 1..4096; the reference file is corrupt");
-    r.grid = element_grid(parse_element_domain(j.at("domain").get<std::string>(), path + ": domain"), k);
+    r.grid = element_grid(Domain::of(parse_domain_kind(j.at("domain").get<std::string>(), path + ": domain")), k);
     if (j.at("rows").get<int>() != r.grid.rows || j.at("cols").get<int>() != r.grid.cols)
       throw InputError(path + ": rows/cols do not match the domain and K");
     r.hemispheres = j.at("hemispheres").get<std::vector<std::string>>();
@@ -378,12 +378,12 @@ std::vector<int> label_clusters(const ElementGrid& grid, const std::vector<int>&
           const int rr = r + dr;
           int cc = c + dc;
           if (rr < 0 || rr >= rows) continue;
-          if (grid.domain == ElementDomain::Sphere) {
+          if (grid.domain.kind == DomainKind::Sphere) {
             cc = (cc + cols) % cols;  // longitude wraps
           } else {
             if (cc < 0 || cc >= cols) continue;
             // Whole-brain rectangle: the two hemispheres meet at the seam only in the map, not in the brain.
-            if (!same_part(grid, c, cc)) continue;
+            if (!grid.domain.same_part(grid.k, c, cc)) continue;
           }
           const int n = rr * cols + cc;
           if (flags[static_cast<std::size_t>(n)] != sign || label[static_cast<std::size_t>(n)] != 0) continue;
@@ -523,7 +523,7 @@ Comparison compare_to_reference(const NormativeReference& ref, const ElementTabl
                            out.flag.begin() + static_cast<std::ptrdiff_t>(offset + static_cast<std::size_t>(ne)));
     int count = 0;
     ElementGrid grid = ref.grid;  // the patient's own seam (each subject's w_L is its own)
-    grid.seam_x = patient.grid.seam_x;
+    grid.domain.seam_x = patient.grid.domain.seam_x;
     const auto label = label_clusters(grid, flags, &count);
     std::vector<ElementCluster> clusters(static_cast<std::size_t>(count));
     for (int e = 0; e < ne; ++e) {

@@ -1,6 +1,6 @@
 #pragma once
 // Normative reference of equal-area cortical elements from control subjects, and the comparison of
-// a patient with it (Zou et al. 2011, `000_9f60545f35b9287a.txt` section 5.2, last paragraph:
+// a patient with it (Zou et al. 2011a section 5.2, last paragraph:
 // "once normative brain patterns for each element are derived from a group of control subjects,
 // whether a particular cortical element derived from a patient falls into the abnormal can be
 // subsequently determined according to the comparison against the normative reference"; the

@@ -87,6 +87,7 @@ struct Hemisphere {
   io::Surface white, pial;
   std::vector<int> cortex;      // region vertices
   MatrixXi cortex_faces;        // faces of the white surface inside the cortex region
+  TopologyReport cortex_topology;  // of cortex_faces (checked once, when read)
   // map
   SquareMapResult map;          // the authalic square map (V, F, UV in [0,1]^2, flow report)
   MapMetrics metrics;
@@ -142,6 +143,7 @@ std::string load_hemisphere(Hemisphere& h, const std::string& white, const std::
                      std::to_string(n) + "; white and pial must come from the same subject and hemisphere");
   CortexRegion region = read_cortex_region(h.white.mesh, white, cortex, h.name);
   h.cortex_faces = std::move(region.F);
+  h.cortex_topology = region.topology;
   std::vector<char> used(n, 0);
   for (Eigen::Index f = 0; f < h.cortex_faces.rows(); ++f)
     for (int c = 0; c < 3; ++c) used[h.cortex_faces(f, c)] = 1;
@@ -198,14 +200,17 @@ namespace {
 // outward, frontal pole at the top middle, so the right hemisphere comes out as the mirror image
 // of the left, as a reader of the two flat maps side by side expects.
 void map_hemisphere(Hemisphere& h, const ProgressFn& progress) {
-  h.map = square_map(h.white.mesh.V, h.cortex_faces, SquareMapOptions{}, progress);
+  SquareMapOptions options;
+  options.region_name = h.name + " hemisphere cortex";
+  options.region_topology = h.cortex_topology;
+  h.map = square_map(h.white.mesh.V, h.cortex_faces, options, progress);
 }
 
 // Acceptance of a map before anything is computed from it (core/metrics.h): a failed map stops
 // the run with exit 3, naming the map and its numbers. m: the map's metrics at the run's K; when
 // K is not 32 (the acceptance grid), V (non-null), UV and F measure it again at 32.
 void require_authalic(const std::string& what, const MapMetrics& m, const MatrixXd* V, const MatrixXd& UV, const MatrixXi& F,
-                      MapDomain domain) {
+                      const Domain& domain) {
   const MapMetrics at32 = V ? map_metrics(*V, UV, F, domain, 32) : m;
   const std::string problem = authalic_acceptance_problem(at32, at32.vertex_ln_area.mean, true);
   if (!problem.empty())
@@ -375,11 +380,11 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   for (Hemisphere& h : hemis) {
     log.begin("authalic square map (" + h.name + ")");
     map_hemisphere(h, progress);
-    h.metrics = map_metrics(h.map.V, h.map.UV, h.map.F, MapDomain::Square, options.k);
+    h.metrics = map_metrics(h.map.V, h.map.UV, h.map.F, Domain::square(), options.k);
     log.note("flips " + std::to_string(h.metrics.flips) + ", element-area CV " + std::to_string(h.metrics.element_cv) +
              ", flow " + h.map.flow.stop_reason);
     require_authalic(h.name + " hemisphere (" + (h.left ? in.lh_white : in.rh_white) + ")", h.metrics,
-                     options.k == 32 ? nullptr : &h.map.V, h.map.UV, h.map.F, MapDomain::Square);
+                     options.k == 32 ? nullptr : &h.map.V, h.map.UV, h.map.F, Domain::square());
     log.end(summary);
   }
 
@@ -397,12 +402,12 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     UV << rect.left.UV, rect.right.UV;
     MatrixXi F(rect.left.F.rows() + rect.right.F.rows(), 3);
     F << rect.left.F, (rect.right.F.array() + static_cast<int>(nl)).matrix();
-    rect_metrics = map_metrics(V, UV, F, MapDomain::Rectangle, options.k);
+    rect_metrics = map_metrics(V, UV, F, Domain::rectangle(), options.k);
     log.note("left part width " + std::to_string(rect.split) + " of 2; flips " + std::to_string(rect_metrics.flips) +
              ", element-area CV " + std::to_string(rect_metrics.element_cv) + " (" + std::to_string(2 * options.k) + "x" +
              std::to_string(options.k) + ")");
     require_authalic("the 2:1 rectangle of both hemispheres", rect_metrics, options.k == 32 ? nullptr : &V, UV, F,
-                     MapDomain::Rectangle);
+                     Domain::rectangle());
     log.end(summary);
   }
 
@@ -451,7 +456,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   // 4. Equal-area elements.
   log.begin("equal-area elements");
   ElementTable table;
-  table.grid = element_grid(ElementDomain::Square, options.k);
+  table.grid = element_grid(Domain::square(), options.k);
   table.normalisation = to_string(norm.kind);
   table.units = norm.units.empty() ? pet.units : norm.units;
   table.subject_id = in.id;
@@ -459,7 +464,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   table.metadata["software"] = software_version();
   table.metadata["sampling"] = hemis[0].sampling.method;
   for (Hemisphere& h : hemis) {
-    const ElementMap m = prepare_element_map(h.white.mesh.V, h.cortex_faces, h.map.UV, h.map.F, h.pet, ElementDomain::Square,
+    const ElementMap m = prepare_element_map(h.white.mesh.V, h.cortex_faces, h.map.UV, h.map.F, h.pet, Domain::square(),
                                              h.name + " square map");
     h.elements = compute_elements(m, table.grid, h.white.to_scanner);
     h.elements.block.hemisphere = h.name;

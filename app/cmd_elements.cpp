@@ -92,13 +92,13 @@ MatrixXi faces_in_map_region(const MatrixXi& F, const MatrixXi& map_F, int num_v
 int run_elements(const ElementsArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   io::check_file_roles({a.surface, a.map, a.values}, analysis::element_output_paths(a.prefix).all());
-  const analysis::ElementDomain domain = analysis::parse_element_domain(a.domain);
-  analysis::ElementGrid grid = analysis::element_grid(domain, a.k);
+  Domain domain = Domain::of(parse_domain_kind(a.domain, "--domain"));
   const io::Surface surface = io::read_surface(a.surface);
   const io::Surface map = io::read_surface(a.map);
   // Where a two-hemisphere rectangle's parts meet, as `rectangle` recorded it (older maps: x = 1).
-  if (const auto seam = map.metadata.find(analysis::kSeamKey); domain == analysis::ElementDomain::Rectangle && seam != map.metadata.end())
-    grid.seam_x = analysis::parse_seam(seam->second, a.map);
+  if (const auto seam = map.metadata.find(analysis::kSeamKey); domain.kind == DomainKind::Rectangle && seam != map.metadata.end())
+    domain.seam_x = analysis::parse_seam(seam->second, a.map);
+  const analysis::ElementGrid grid = analysis::element_grid(domain, a.k);
   const VectorXd values = io::read_per_vertex(a.values, surface.mesh.num_vertices());
   const auto meta = func_metadata(a.values);
 
@@ -117,7 +117,7 @@ int run_elements(const ElementsArgs& a) {
   analysis::ElementTable table;
   table.grid = grid;
   std::string hemisphere = a.hemisphere.empty() ? analysis::hemisphere_of(surface.metadata, a.surface) : a.hemisphere;
-  if (domain == analysis::ElementDomain::Rectangle && a.hemisphere.empty()) hemisphere = "both";
+  if (domain.kind == DomainKind::Rectangle && a.hemisphere.empty()) hemisphere = "both";
   table.blocks.push_back({hemisphere, result.block.elements});
   auto from_meta = [&](const std::string& key, const std::string& fallback) {
     const auto it = meta.find(key);
@@ -187,7 +187,7 @@ const bool registered = register_command({45, [](CLI::App& parent) {
   sub->add_option("MAP", a->map, "Its authalic map (.surf.gii): x,y in the domain (or scaled), or a sphere")->required();
   sub->add_option("VALUES", a->values, "Per-vertex values, e.g. from `authalic sample` (.func.gii)")->required();
   sub->add_option("OUT_PREFIX", a->prefix, "Output prefix")->required();
-  sub->add_option("--k", a->k, "Grid resolution K")->check(in_range(1, 1024))->capture_default_str();
+  add_k_option(*sub, a->k, {DomainKind::Square, DomainKind::Rectangle, DomainKind::Sphere});
   sub->add_option("--domain", a->domain, "square, rectangle or sphere")
       ->check(CLI::IsMember({"square", "rectangle", "sphere"}))
       ->capture_default_str();

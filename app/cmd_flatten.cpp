@@ -190,17 +190,21 @@ void run(const FlattenArgs& a) {
   if (!a.density.empty()) options.density = io::read_per_vertex(a.density, mesh.num_vertices());
 
   SquareMapResult r;
+  StageClock clock(terminal_progress());
   try {
-    r = square_map(mesh.V, region, options, terminal_progress());
+    r = square_map(mesh.V, region, options, clock.progress());
   } catch (const InputError& e) {
     throw InputError(a.surface + " (" + region_source + "): " + e.what());
+  } catch (const ProcessingError& e) {
+    throw ProcessingError(a.surface + " (" + region_source + "): " + e.what() + " (--grid 1024)");
   }
+  clock.stop();
   const double seconds_map = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Acceptance (core/metrics.h) before anything is written: a map that is not authalic is a
   // failure (exit 3), never a success with a note.
-  const MapMetrics final_metrics = map_metrics(r.V, r.UV, r.F, MapDomain::Square, a.k);
-  const MapMetrics accept_metrics = a.k == 32 ? final_metrics : map_metrics(r.V, r.UV, r.F, MapDomain::Square, 32);
+  const MapMetrics final_metrics = map_metrics(r.V, r.UV, r.F, Domain::square(), a.k);
+  const MapMetrics accept_metrics = a.k == 32 ? final_metrics : map_metrics(r.V, r.UV, r.F, Domain::square(), 32);
   // The per-vertex limit is checked on the number the user is shown (the metrics); with a
   // density the target is not the surface area, so the flow's density-weighted one is used.
   const bool plain = options.density.size() == 0;
@@ -278,14 +282,14 @@ void run(const FlattenArgs& a) {
                       {"flow", flow_json(r.flow, options.flow)},
                       {"flips", r.flips},
                       {"metrics", metrics_json(final_metrics)},
-                      {"seconds", {{"map", seconds_map}, {"initial_map", r.seconds_initial}, {"flow", r.seconds_flow}, {"total", seconds}}}};
+                      {"seconds", {{"map", seconds_map}, {"initial_map", clock.seconds("initial")}, {"flow", clock.seconds("stretch") + clock.seconds("flow")}, {"total", seconds}}}};
   if (cleanup) j["region_cleanup"] = region_cleanup_json(*cleanup);
   j["acceptance"] = acceptance_json(problem, "32x32");
   j["initial_map"]["stretch_energy"] = {{"iterations", r.stretch.iterations},
                                         {"face_ln_stretch_abs_mean_before", r.stretch.initial_log_stretch},
                                         {"face_ln_stretch_abs_mean_after", r.stretch.final_log_stretch}};
   if (!a.metrics.empty()) {
-    j["initial_metrics"] = metrics_json(map_metrics(r.V, r.UV_initial, r.F, MapDomain::Square, a.k));
+    j["initial_metrics"] = metrics_json(map_metrics(r.V, r.UV_initial, r.F, Domain::square(), a.k));
     write_json_file(a.metrics, j);
   }
 
@@ -373,7 +377,7 @@ void setup(CLI::App& parent) {
   sub->add_option("--density", a->density,
                   "Per-vertex density (GIFTI shape / FreeSurfer curv / text, > 0): a region of density 2 gets twice its "
                   "natural share of the square");
-  sub->add_option("--k", a->k, "Element grid K (K x K elements) for metrics and PNG")->check(in_range(1, 1024))->capture_default_str();
+  add_k_option(*sub, a->k, {DomainKind::Square});
   sub->add_option("--method", a->method, "Flow: grid (Moser flow on a DCT grid, default) or mesh (discrete Lie flow, DLF)")
       ->check(CLI::IsMember({"grid", "mesh"}))
       ->capture_default_str();

@@ -151,7 +151,7 @@ std::vector<std::string> subject_args(const std::string& exe, const CohortSubjec
 void check_reference(const GroupArgs& a) {
   if (a.normative.empty()) return;
   const analysis::NormativeReference ref = analysis::read_reference(a.normative);
-  if (ref.grid.domain != analysis::ElementDomain::Square || ref.grid.k != a.k)
+  if (ref.grid.domain.kind != DomainKind::Square || ref.grid.k != a.k)
     throw InputError(a.normative + ": the reference has " + to_string(ref.grid.domain) + " K = " + std::to_string(ref.grid.k) +
                      " elements but the subjects would get square K = " + std::to_string(a.k) + "; give --k " +
                      std::to_string(ref.grid.k) + " or a reference built with K = " + std::to_string(a.k));
@@ -285,7 +285,7 @@ const bool registered = register_command({60, [](CLI::App& parent) {
   sub->add_option("out", args->out, "Output folder")->required();
   sub->add_option("--jobs,-j", args->jobs, "Subjects processed at once (threads are shared among them)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--k", args->k, "Element grid: K x K per hemisphere square")->check(in_range(2, 512));
+  add_k_option(*sub, args->k, {DomainKind::Square}, 2, 512);
   sub->add_flag("--force", args->force, "Write into an existing output folder");
   sub->add_option("--normalize", args->normalize,
                   "Intensity normalisation of every subject, as `run --normalize`: none, global (cortical mean), or a "

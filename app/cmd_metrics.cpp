@@ -25,7 +25,7 @@ struct MetricsArgs {
 
 // A 3D surface given as the map would give numbers that mean nothing: a planar map must be flat
 // (z constant) and a sphere map on one sphere about the origin.
-void check_map_shape(const std::string& path, const MatrixXd& U, const MatrixXi& F, MapDomain domain) {
+void check_map_shape(const std::string& path, const MatrixXd& U, const MatrixXi& F, const Domain& domain) {
   std::vector<int> used;
   {
     std::vector<char> seen(static_cast<std::size_t>(U.rows()), 0);
@@ -35,7 +35,7 @@ void check_map_shape(const std::string& path, const MatrixXd& U, const MatrixXi&
   }
   std::ostringstream s;
   s << std::setprecision(3);
-  if (domain == MapDomain::Sphere) {
+  if (!domain.planar()) {
     double lo = INFINITY, hi = 0;
     for (int v : used) lo = std::min(lo, U.row(v).norm()), hi = std::max(hi, U.row(v).norm());
     if (!(hi > 0) || (hi - lo) > 0.05 * hi) {  // FreeSurfer spheres: within 0.01 %; brains: 30 % and more
@@ -59,8 +59,7 @@ void run(const MetricsArgs& a) {
   const io::Surface surface = io::read_surface(a.surface);
   const io::Surface map = io::read_surface(a.map);
   const int nv = surface.mesh.num_vertices();
-  const MapDomain domain = a.domain == "sphere" ? MapDomain::Sphere : a.domain == "rectangle" ? MapDomain::Rectangle
-                                                                                                : MapDomain::Square;
+  const Domain domain = Domain::of(parse_domain_kind(a.domain, "--domain"));
   if (map.mesh.num_vertices() < nv)
     throw InputError(a.map + ": has " + std::to_string(map.mesh.num_vertices()) + " vertices, fewer than the " +
                      std::to_string(nv) + " of " + a.surface + "; give a map on the surface's vertex indexing");
@@ -88,8 +87,8 @@ void run(const MetricsArgs& a) {
   // scale and shift of the used vertices' bounding box (ratios do not depend on it; the element
   // grid does).
   bool rescaled = false;
-  if (domain != MapDomain::Sphere) {
-    const double W = domain == MapDomain::Rectangle ? 2.0 : 1.0;
+  if (domain.planar()) {
+    const double W = domain.width();
     std::vector<char> used(known, 0);
     for (Eigen::Index f = 0; f < F.rows(); ++f)
       for (int c = 0; c < 3; ++c) used[F(f, c)] = 1;
@@ -143,9 +142,7 @@ void setup(CLI::App& parent) {
   sub->add_option("--domain", a->domain, "Map domain: square [0,1]^2, rectangle [0,2]x[0,1], or sphere")
       ->check(CLI::IsMember({"square", "rectangle", "sphere"}))
       ->capture_default_str();
-  sub->add_option("--k", a->k, "Element grid K: K x K (square), 2K x K (rectangle, sphere)")
-      ->check(in_range(1, 1024))
-      ->capture_default_str();
+  add_k_option(*sub, a->k, {DomainKind::Square, DomainKind::Rectangle, DomainKind::Sphere});
   add_common_options(*sub);
   sub->callback([a]() { run(*a); });
 }

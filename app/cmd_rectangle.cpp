@@ -181,7 +181,7 @@ struct Checked {
 // failure (exit 3, nothing written), unless --keep-failed.
 Checked check_acceptance(const RectangleArgs& a, const std::vector<const RectanglePart*>& parts, const std::string& what) {
   Checked c{combine(parts), {}, {}};
-  c.at32 = map_metrics(c.all.V, c.all.UV, c.all.F, MapDomain::Rectangle, 32);
+  c.at32 = map_metrics(c.all.V, c.all.UV, c.all.F, Domain::rectangle(), 32);
   c.problem = authalic_acceptance_problem(c.at32, c.at32.vertex_ln_area.mean, true);
   if (!c.problem.empty() && !a.keep_failed)
     throw ProcessingError(what + ": the rectangle map is not authalic: " + c.problem +
@@ -199,13 +199,13 @@ void finish(const RectangleArgs& a, const std::vector<const RectanglePart*>& par
   VectorXd values(V.rows());
   for (std::size_t i = 0, ov = 0; i < parts.size(); ov += parts[i]->V.rows(), ++i)
     values.segment(static_cast<Eigen::Index>(ov), parts[i]->V.rows()) = part_values(*parts[i], shading[i]);
-  const MapMetrics m = a.k == 32 ? checked.at32 : map_metrics(V, UV, F, MapDomain::Rectangle, a.k);
+  const MapMetrics m = a.k == 32 ? checked.at32 : map_metrics(V, UV, F, Domain::rectangle(), a.k);
   j["metrics"] = metrics_json(m);
   j["acceptance"] = acceptance_json(problem, "64x32");
   j["extent"] = {UV.col(0).minCoeff(), UV.col(1).minCoeff(), UV.col(0).maxCoeff(), UV.col(1).maxCoeff()};
   j["seconds"] = seconds;
   if (!a.metrics.empty()) {
-    j["initial_metrics"] = metrics_json(map_metrics(V, UV0, F, MapDomain::Rectangle, a.k));
+    j["initial_metrics"] = metrics_json(map_metrics(V, UV0, F, Domain::rectangle(), a.k));
     write_json_file(a.metrics, j);
   }
   if (!a.png.empty()) {
@@ -216,7 +216,7 @@ void finish(const RectangleArgs& a, const std::vector<const RectanglePart*>& par
     std::tie(c.vmin, c.vmax) = analysis::robust_range(values);
     analysis::FlatRenderOptions o;
     o.width = 1000;
-    o.domain_width = 2.0;
+    o.domain_width = Domain::rectangle().width();
     o.grid_cols = 2 * a.k;
     o.grid_rows = a.k;
     o.title = problem.empty() ? "authalic rectangle" : "FAILED acceptance: rectangle map (kept for inspection)";
@@ -272,7 +272,9 @@ void run_one_surface(const RectangleArgs& a) {
   try {
     r = whole_brain_rectangle_map(s.mesh, options, terminal_progress());
   } catch (const InputError& e) {
-    throw InputError(a.surface + ": " + e.what());
+    // Core states the fact; the flags that fix it are the CLI's.
+    const bool topology = std::string(e.what()).find("not a closed genus-0 surface") != std::string::npos;
+    throw InputError(a.surface + ": " + e.what() + (topology ? " (or give two hemispheres with --lh/--rh)" : ""));
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const Checked checked = check_acceptance(a, {&r.map}, a.surface);
@@ -282,7 +284,7 @@ void run_one_surface(const RectangleArgs& a) {
   io::write_surface(names.map, as_flat_mesh(r.map.UV, r.map.F), flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)", problem, "none"));
   if (a.flat) {
     // 1 mm^2 of flat map = 1 mm^2 of cortex: the rectangle (area 2) scaled by sqrt(area / 2).
-    io::write_surface(names.flat, as_flat_mesh(r.map.UV, r.map.F, std::sqrt(r.map.area_mm2 / 2.0)),
+    io::write_surface(names.flat, as_flat_mesh(r.map.UV, r.map.F, std::sqrt(r.map.area_mm2 / Domain::rectangle().area())),
                       flat_options(structure, "rectangle scaled to the cortical area (mm)", problem, "none"));
   }
   if (a.cut_surface) {
@@ -318,7 +320,9 @@ void run_two_hemispheres(const RectangleArgs& a) {
   try {
     r = hemisphere_rectangle_map(left, right, {}, terminal_progress());
   } catch (const InputError& e) {
-    throw InputError(a.lh + ", " + a.rh + ": " + e.what());
+    const bool topology = std::string(e.what()).find("not one disk") != std::string::npos;
+    throw InputError(a.lh + ", " + a.rh + ": " + e.what() +
+                     (topology ? "; give each hemisphere's cortex (e.g. --lh-faces-from flat_left.gii.gz, or --lh-cortex lh.cortex.label)" : ""));
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const std::string what = a.lh + ", " + a.rh;
@@ -330,7 +334,7 @@ void run_two_hemispheres(const RectangleArgs& a) {
   io::write_surface(lpath, as_flat_mesh(r.left.UV, r.left.F), flat_options("CortexLeft", "rectangle [0,2]x[0,1], left part", problem, seam));
   io::write_surface(rpath, as_flat_mesh(r.right.UV, r.right.F), flat_options("CortexRight", "rectangle [0,2]x[0,1], right part", problem, seam));
   if (a.flat) {
-    const double scale = std::sqrt((r.left.area_mm2 + r.right.area_mm2) / 2.0);
+    const double scale = std::sqrt((r.left.area_mm2 + r.right.area_mm2) / Domain::rectangle().area());
     io::write_surface(names.lh_flat, as_flat_mesh(r.left.UV, r.left.F, scale), flat_options("CortexLeft", "rectangle scaled to the cortical area (mm)", problem, seam));
     io::write_surface(names.rh_flat, as_flat_mesh(r.right.UV, r.right.F, scale), flat_options("CortexRight", "rectangle scaled to the cortical area (mm)", problem, seam));
   }
@@ -398,7 +402,7 @@ void setup(CLI::App& parent) {
       ->check(CLI::IsMember({"auto", "surface", "sphere"}))
       ->capture_default_str()
       ->needs(surface);
-  sub->add_option("--k", a->k, "Element grid: 2K x K cells")->check(in_range(1, 512))->capture_default_str();
+  add_k_option(*sub, a->k, {DomainKind::Rectangle}, 1, 512);
   add_common_options(*sub);
   sub->callback([a]() {
     if (a->surface.empty() && a->lh.empty()) throw InputError("rectangle: give --surface S, or --lh S --rh S (see --help)");

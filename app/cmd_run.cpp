@@ -116,7 +116,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_option("--sex", in.sex, "Sex, recorded in the report and the sidecars: F, M or O (female, male, other)")->transform(sex_letter());
   sub->add_option("--out", a->options.out_dir, "Output folder; the subject goes to OUT/sub-<id>")->required();
   sub->add_flag("--force", a->options.force, "Replace an existing OUT/sub-<id>");
-  sub->add_option("--k", a->options.k, "Elements: K x K per hemisphere (equal-area cells)")->check(in_range(2, 512));
+  add_k_option(*sub, a->options.k, {DomainKind::Square}, 2, 512);
   sub->add_option("--depth", a->options.depth_mm, "Normal projection depth, mm (default 10, Zou et al. 2011)")
       ->check(in_range(0.0, 50.0));
   sub->add_option("--normalize", a->options.normalize,

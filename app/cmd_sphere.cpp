@@ -60,16 +60,20 @@ void run(const SphereArgs& a) {
   if (!a.conformal.empty() && options.route != SphereRoute::Flow)
     throw InputError("--conformal: only the flow route has a conformal sphere; add --route flow to write one");
   SphereMapResult r;
+  StageClock clock(terminal_progress());
+  const auto t_map = std::chrono::steady_clock::now();
   try {
-    r = authalic_sphere_map(mesh, options, terminal_progress());
+    r = authalic_sphere_map(mesh, options, clock.progress());
   } catch (const InputError& e) {
     throw InputError(a.surface + ": " + e.what());
   }
+  clock.stop();
+  const double seconds_map = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_map).count();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Acceptance (core/metrics.h) before anything is written: a sphere that is not authalic is a
   // failure (exit 3), never a success with a note.
-  const MapMetrics final_metrics = map_metrics(mesh.V, r.sphere, mesh.F, MapDomain::Sphere, 32);
+  const MapMetrics final_metrics = map_metrics(mesh.V, r.sphere, mesh.F, Domain::sphere(), 32);
   const std::string problem = authalic_acceptance_problem(final_metrics, final_metrics.vertex_ln_area.mean, true);
   const std::string failure = a.surface + ": the sphere map is not authalic: " + problem;
   if (!problem.empty() && !a.keep_failed)
@@ -112,7 +116,7 @@ void run(const SphereArgs& a) {
                       {"repaired_vertices", r.repaired_vertices},
                       {"flips", r.flips},
                       {"metrics", metrics_json(final_metrics)},
-                      {"seconds", {{"conformal", r.seconds_conformal}, {"flow", r.seconds_flow}, {"total", seconds}}}};
+                      {"seconds", {{"conformal", clock.seconds("conformal")}, {"flow", seconds_map - clock.seconds("conformal")}, {"total", seconds}}}};
   j["acceptance"] = acceptance_json(problem, "64x32");
   {
     nlohmann::json rot = nlohmann::json::array();
@@ -121,7 +125,7 @@ void run(const SphereArgs& a) {
     nlohmann::json passes = nlohmann::json::array();
     for (const auto& p : r.flow.passes)
       passes.push_back({{"density_min", p.rho_min}, {"density_max", p.rho_max}, {"density_abs_ln_mean", p.rho_abs_log_mean},
-                        {"rk4_steps", p.rk4_steps}, {"seconds", p.seconds}});
+                        {"rk4_steps", p.rk4_steps}});
     if (r.route == SphereRoute::Flow) {
       j["flow"] = {{"method", "Moser flow on a fixed cube-sphere background"},
                    {"grid_cells_per_edge", r.flow.grid_cells},
@@ -154,7 +158,7 @@ void run(const SphereArgs& a) {
   }
   if (!a.metrics.empty()) {
     if (r.route == SphereRoute::Flow)
-      j["conformal_metrics"] = metrics_json(map_metrics(mesh.V, r.conformal, mesh.F, MapDomain::Sphere, 32));
+      j["conformal_metrics"] = metrics_json(map_metrics(mesh.V, r.conformal, mesh.F, Domain::sphere(), 32));
     write_json_file(a.metrics, j);
   }
 

@@ -6,8 +6,12 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <map>
+#include <memory>
 #include <string>
+#include <vector>
 
+#include "core/domain.h"
 #include "core/progress.h"
 
 namespace authalic::app {
@@ -30,6 +34,10 @@ GlobalOptions& global_options();
 // Validator for a number in [lo, hi], with the bounds printed as written ("0.05 to 10", not
 // CLI::Range's "0.050000 to 10.000000"); NaN and trailing characters are refused.
 CLI::Validator in_range(double lo, double hi);
+// The --k option of every subcommand that builds an element grid: the grid of each domain in
+// `kinds` is Domain::element_cols(K) x K (core/domain.h), which the help states; [lo, hi] is the
+// command's range (its tables and images grow with K^2).
+CLI::Option* add_k_option(CLI::App& sub, int& k, const std::vector<DomainKind>& kinds, int lo = 1, int hi = 1024);
 
 // Validator for ages in years: a plain finite number in (0, 130] ("7O", "nan", "-inf", "-5",
 // and 0, which once meant "unknown", are refused, not read as 7 or unknown).
@@ -49,6 +57,22 @@ void add_common_options(CLI::App& sub);
 void info(const std::string& line);
 // A ProgressFn that draws on a terminal (stderr is a tty, not --quiet/--json) and is silent otherwise.
 ProgressFn terminal_progress();
+
+// Wall time per progress stage, measured by the caller (core results carry no clock): the time
+// from one progress report to the next counts for the stage of the earlier one ("initial",
+// "flow", "conformal", ...). progress() forwards every report to `inner`.
+class StageClock {
+ public:
+  explicit StageClock(ProgressFn inner = {});
+  ProgressFn progress();
+  // Ends the stage running now; seconds(stage) is then final.
+  void stop();
+  double seconds(const std::string& stage) const;
+
+ private:
+  struct State;
+  std::shared_ptr<State> state_;
+};
 
 // Environment variable `group` sets for its child processes: the parent's pid. A child that sees
 // it dies with that parent (prctl PR_SET_PDEATHSIG), so a killed `group` leaves no orphan runs.

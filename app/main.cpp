@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cctype>
+#include <chrono>
 #include <cerrno>
 #include <cmath>
 #include <csignal>
@@ -62,6 +63,15 @@ CLI::Validator in_range(double lo, double hi) {
         return {};
       },
       "[" + range + "]");
+}
+
+CLI::Option* add_k_option(CLI::App& sub, int& k, const std::vector<DomainKind>& kinds, int lo, int hi) {
+  std::string grids;
+  for (const DomainKind kind : kinds) {
+    const Domain d = Domain::of(kind);
+    grids += std::string(grids.empty() ? "" : ", ") + (d.element_cols(2) == 2 ? "K x K" : "2K x K") + " on the " + to_string(kind);
+  }
+  return sub.add_option("--k", k, "Element grid K (" + grids + ")")->check(in_range(lo, hi))->capture_default_str();
 }
 
 double parse_age(const std::string& text, const std::string& where) {
@@ -174,6 +184,35 @@ ProgressFn terminal_progress() {
     }
     std::fflush(stderr);
   };
+}
+
+struct StageClock::State {
+  ProgressFn inner;
+  std::map<std::string, double> seconds;
+  std::string stage;
+  std::chrono::steady_clock::time_point since;
+  void lap(const std::string& next) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!stage.empty()) seconds[stage] += std::chrono::duration<double>(now - since).count();
+    stage = next;
+    since = now;
+  }
+};
+
+StageClock::StageClock(ProgressFn inner) : state_(std::make_shared<State>()) { state_->inner = std::move(inner); }
+
+ProgressFn StageClock::progress() {
+  return [s = state_](const std::string& stage, double fraction, const std::string& message) {
+    s->lap(stage);
+    if (s->inner) s->inner(stage, fraction, message);
+  };
+}
+
+void StageClock::stop() { state_->lap({}); }
+
+double StageClock::seconds(const std::string& stage) const {
+  const auto it = state_->seconds.find(stage);
+  return it == state_->seconds.end() ? 0.0 : it->second;
 }
 
 void set_exit_code(int code) { g_exit_code = code; }

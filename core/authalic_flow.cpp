@@ -21,6 +21,15 @@
 namespace authalic {
 
 namespace {
+// A rejected grid pass is retried at half its fraction down to this one: smaller partial passes
+// move too little to pass the next acceptance, so the flow stops there ("no improvement").
+constexpr double kMinPassFraction = 0.2;
+// A polish step lowers the per-face error; it may raise the per-vertex mean (the stopping
+// criterion) by at most 5 %, so the polish never undoes what the passes reached.
+constexpr double kPolishVertexSlack = 1.05;
+}  // namespace
+
+namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // A polish (global steps) whose per-vertex mean is above its tolerance ends after this many steps in a row that
@@ -155,7 +164,9 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
   NeumannPoissonGrid solver(nx, ny, hx, hy);
   MatrixXd rho_s, g;
   solver.smooth_and_solve(rho, smoothing_cells * std::max(hx, hy), &rho_s, &g);
-  rho_s = rho_s.cwiseMax(1e-3);  // the smoothed density of a covering map is positive; guard anyway
+  // The smoothed density of a covering map is positive; the velocity divides by it, so guard anyway.
+  constexpr double kMinSmoothedDensity = 1e-3;
+  rho_s = rho_s.cwiseMax(kMinSmoothedDensity);
   // Partial pass (fraction < 1): carry ρ only to ρ_1 ∝ ρ^(1 − fraction), i.e. remove that
   // fraction of ln ρ. Moser's construction for two densities: ρ_t = (1 − t) ρ + t ρ_1,
   // Δg = ρ − ρ_1, v_t = ∇g / ρ_t. Used when a full pass cannot follow a density of too large a
@@ -288,7 +299,7 @@ VectorXd solve_neumann(const SparseMatrix& K, const VectorXd& b, const VectorXd&
 }
 
 // Per-vertex gradient of a P1 function on the planar mesh: the angle-weighted mean of the face
-// gradients (seed 000 eq. 16). Boundary vertices keep only the component along their side;
+// gradients (Zou et al. 2011a eq. 16). Boundary vertices keep only the component along their side;
 // corners and unused vertices get zero.
 MatrixXd vertex_gradients(const MatrixXd& UV, const MatrixXi& F, const VectorXd& g, const VectorXi& side_mask) {
   const Eigen::Index nv = UV.rows();
@@ -338,7 +349,7 @@ double adaptive_step(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, d
 // Per-vertex steps: each vertex takes theta x the smallest critical step of its triangles (capped
 // at 1); triangles that would still flip (their vertices' steps differ) halve the steps of their
 // vertices until none flips. A single bad triangle then slows only its own vertices, not the mesh
-// (the stall measured with one global step, issue 3), and no triangle can flip.
+// (the stall measured with one global step), and no triangle can flip.
 // theta <= 0: no critical-step limit, only the end state is checked (for the grid pass, whose
 // vertices travel on curved paths, so the straight-path critical steps do not apply).
 // face_limit (optional): per-face signed area each triangle must stay above, instead of min_area.
@@ -386,7 +397,7 @@ void apply_displacement(MatrixXd& UV, const MatrixXd& D, double lambda, const Ve
   }
 }
 
-// One discrete Lie-flow displacement on the domain mesh F_dom (seed 000 section 4.2-4.3, DLF
+// One discrete Lie-flow displacement on the domain mesh F_dom (Zou et al. 2011a section 4.2-4.3, DLF
 // 5.2): Δg = h_M − h_Ω (areas, Neumann), displacement = per-vertex ∇g. `fraction` < 1 asks for
 // only that part of the remaining area change (Zou eq. 19: 1 / (K − k + 1)).
 MatrixXd lie_displacement(const MatrixXd& UV, const MatrixXi& F_dom, const VectorXd& vertex_target, double fraction,
@@ -611,7 +622,7 @@ int open_thin_triangles(const MatrixXi& F, const VectorXi& side_mask, double wid
 int repair_flips(const MatrixXd& V, const MatrixXi& F, const VectorXi& side_mask, double width, MatrixXd& UV,
                  int* remaining) {
   const int nv = static_cast<int>(UV.rows());
-  const double min_area = 1e-12 * width / std::max<Eigen::Index>(1, F.rows());
+  const double min_area = flip_area_threshold(width, F.rows());
   auto flipped_faces = [&]() {
     std::vector<int> out;
     const VectorXd a = signed_face_areas_2d(UV, F);
@@ -696,7 +707,7 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
   rep.initial_vertex_mean = cur.mean;
   rep.initial_vertex_p99 = cur.p99;
   auto met = [&](const Stats& s) { return s.mean <= opt.tolerance_mean && s.p99 <= opt.tolerance_p99; };
-  const double min_area = 1e-12 * w / std::max<Eigen::Index>(1, F.rows());
+  const double min_area = flip_area_threshold(w, F.rows());
 
   if (opt.method == FlowMethod::Grid) {
     rep.stop_reason = "iteration limit";
@@ -712,7 +723,7 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
       // triangles can flip where the velocity varies on the scale of a triangle. Take the moved
       // positions and re-place the vertices around those triangles (repair_flips); holding their
       // vertices back instead leaves a stuck patch behind that the next passes cannot reach
-      // (measured on B2, the pial surface: element CV 0.039 instead of 0.004). Only if the repair
+      // (measured on benchmark B2, the pial surface: element CV 0.039 instead of 0.004). Only if the repair
       // fails, fall back to per-vertex flip-preventing steps, so no pass leaves a flipped triangle.
       MatrixXd next = moved;
       for (Eigen::Index v = 0; v < next.rows(); ++v) constrain(next(v, 0), next(v, 1), side_mask.size() ? side_mask[v] : 0, w);
@@ -722,7 +733,7 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
         // Two valid fall-backs: the folded triangles' vertices held back along their paths, or
         // the moved map untangled by neighbour means (untangle_flips); the one with the lower
         // per-vertex error is kept. Holding back cascades on native meshes (a held vertex is
-        // overtaken by its neighbours; fs741 pial R1, first pass: per-vertex mean 0.27 held back,
+        // overtaken by its neighbours; fs741 pial (benchmark R1), first pass: per-vertex mean 0.27 held back,
         // 0.033 untangled); untangling smooths a patch (the fsaverage5 whole-brain rectangle:
         // element CV 0.011 untangled, below 0.01 held back).
         const MatrixXd held = local_step_positions(UV, F, moved - UV, 0.0, side_mask, w, min_area);
@@ -753,7 +764,7 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
       if (!(s.mean < cur.mean) || thinned) {
         // A full pass could not follow the density (its range too large for the grid): retry
         // with partial passes before giving up.
-        if (fraction > 0.2) {
+        if (fraction > kMinPassFraction) {
           fraction *= 0.5;
           --pass;
           continue;
@@ -865,7 +876,7 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
       const bool better = line_search(D, [&](const MatrixXd& next, double& fm, Stats& st) {
         fm = face_log_ratio_mean(target, next, F);
         st = stats_of(next);
-        return fm < cur_face && st.mean <= cur.mean * 1.05;
+        return fm < cur_face && st.mean <= cur.mean * kPolishVertexSlack;
       });
       if (!better) break;
       const bool slow = cur_face > 0.99 * before;

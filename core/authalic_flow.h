@@ -2,8 +2,8 @@
 // Area-restoring flows on the rectangle [0, W] x [0, 1]: from an initial map UV of a disk mesh
 // (e.g. core/conformal_map.h) to an authalic (area-preserving) or measure-controlled one.
 //
-// Theory (Zou et al. 2011, seed 000 section 3, eq. 2-10; Moser's construction as in Dominitz &
-// Tannenbaum, seed 001 section 4.2): let ρ be the density of the surface measure pushed to the
+// Theory (Zou et al. 2011a section 3, eq. 2-10; Moser's construction as in Dominitz &
+// Tannenbaum 2010 section 4.2): let ρ be the density of the surface measure pushed to the
 // domain by the current map (surface area / domain area, normalised to mean 1). With
 // ρ_t = (1 − t) ρ + t, the continuity equation ∂ρ_t/∂t + div(ρ_t v_t) = 0 is solved by
 //     Δg = ρ − 1 (Neumann: ∂g/∂n = 0 on the sides),   v_t = ∇g / ((1 − t) ρ + t),
@@ -12,17 +12,17 @@
 // new map is area-preserving up to discretisation; the pass is repeated on the new map.
 //
 // Methods:
-//  - Grid (default; issue 3, "a formulation that works"): ρ is rasterised area-weighted onto a
+//  - Grid (default; the moving-mesh flow stalls on one thin triangle, measured): ρ is rasterised area-weighted onto a
 //    regular grid (exact triangle/cell clipping), lightly smoothed, the Poisson problem is solved
 //    by DCT (core/poisson_dct.h, exact Neumann: the normal velocity vanishes on the sides, so
 //    boundary vertices slide along their side and corners stay), vertices are moved by RK4 with
 //    bilinear interpolation of ∇g and ρ. Passes repeat until the per-vertex area ratio meets the
 //    tolerance or the pass budget is spent.
-//  - Mesh (DLF, seed 004 Algorithm 1; seed 000 Algorithm 1): Δg = h_Ω − h_M with the cotangent
+//  - Mesh (DLF Algorithm 1; Zou et al. 2011a Algorithm 1): Δg = h_Ω − h_M with the cotangent
 //    Laplacian of the flowing domain mesh after Delaunay edge flips, Neumann condition (DLF eq. 3),
-//    vertex gradients by the angle-weighted mean of face gradients (seed 000 eq. 16), displacement
+//    vertex gradients by the angle-weighted mean of face gradients (Zou et al. 2011a eq. 16), displacement
 //    λ ∇g with the adaptive flip-preventing step λ = θ min_t λ_t* (DLF eq. 5) or Zou's fixed-K
-//    schedule (seed 000 eq. 19), boundary vertices sliding along their side, corners fixed.
+//    schedule (Zou et al. 2011a eq. 19), boundary vertices sliding along their side, corners fixed.
 //  - Polish (after Grid, on by default): Gauss-Newton steps on the per-face areas of the output
 //    connectivity (face_area_newton_displacement), kept only while they lower the per-face error
 //    without flipping; for the sub-cell errors a grid cannot see (native meshes). Then local
@@ -54,8 +54,8 @@ struct FlowOptions {
 
   // Grid method.
   int grid_resolution = 512;     // cells along the unit side (nx = round(W * resolution), ny = resolution)
-  int rk4_steps = 20;            // RK4 steps over t in [0, 1] per pass (20 and 80 agree to 1e-3 on B1)
-  // Passes beyond 3 are stopped by min_pass_gain on every mesh measured (fsaverage5 B1-B3, fs741
+  int rk4_steps = 20;            // RK4 steps over t in [0, 1] per pass (20 and 80 agree to 1e-3 on benchmark B1, docs/references.md)
+  // Passes beyond 3 are stopped by min_pass_gain on every mesh measured (benchmarks B1-B3, fs741
   // white and pial): `flatten`, `run` and `rectangle` take this default (they had 3 and 6).
   int max_passes = 3;
   double min_pass_gain = 0.95;   // stop after a pass that keeps more than this share of the error

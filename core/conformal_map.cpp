@@ -1,6 +1,6 @@
 // Initial map of a disk onto the rectangle [0, W] x [0, 1]: arc-length boundary, corner and ear
 // splits, harmonic (cotangent = LSCM with fixed boundary) interior with fallbacks. See
-// core/conformal_map.h; seed 000 (Zou et al. 2011) section 4.1.
+// core/conformal_map.h; Zou et al. 2011a section 4.1.
 #include "core/conformal_map.h"
 #include "core/sparse_cholesky.h"
 
@@ -18,27 +18,10 @@ namespace authalic {
 
 namespace {
 
-double perimeter(double width) { return 2.0 * width + 2.0; }
-
 // Perimeter coordinates of the four corners (0,0), (W,0), (W,1), (0,1) and the side bits each carries.
 std::array<double, 4> corner_coordinates(double w) { return {0.0, w, w + 1.0, 2.0 * w + 1.0}; }
 constexpr std::array<int, 4> kCornerSides = {kSideBottom | kSideLeft, kSideBottom | kSideRight, kSideRight | kSideTop,
                                              kSideTop | kSideLeft};
-
-double wrap_perimeter(double s, double w) {
-  const double p = perimeter(w);
-  s = std::fmod(s, p);
-  if (s < 0) s += p;
-  return s;
-}
-
-int side_of(double s, double w) {
-  s = wrap_perimeter(s, w);
-  if (s < w) return kSideBottom;
-  if (s < w + 1.0) return kSideRight;
-  if (s < 2.0 * w + 1.0) return kSideTop;
-  return kSideLeft;
-}
 
 Eigen::Vector3d row3(const MatrixXd& V, int i) { return V.row(i).head<3>().transpose(); }
 
@@ -125,15 +108,6 @@ std::string to_string(HarmonicWeights w) {
     case HarmonicWeights::ClampedCotangent: return "clamped cotangent";
   }
   return "unknown";
-}
-
-Eigen::Vector2d rectangle_perimeter_point(double s, double width) {
-  const double w = width;
-  s = wrap_perimeter(s, w);
-  if (s < w) return {s, 0.0};
-  if (s < w + 1.0) return {w, s - w};
-  if (s < 2.0 * w + 1.0) return {w - (s - w - 1.0), 1.0};
-  return {0.0, 1.0 - (s - 2.0 * w - 1.0)};
 }
 
 int count_flipped(const MatrixXd& UV, const MatrixXi& F, double min_area) {
@@ -318,7 +292,7 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
   }
 
   // Arc-length perimeter coordinates, unwrapped: s[0] = anchor position, increasing by P * l / L.
-  const double P = perimeter(w);
+  const double P = rectangle_perimeter(w);
   std::vector<double> s(nb + 1);
   double total = 0;
   for (int i = 0; i < nb; ++i) total += (row3(V, loop[(i + 1) % nb]) - row3(V, loop[i])).norm();
@@ -386,7 +360,7 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
       vertex_s[v] = corners[corner_of[i]];
       ++R.corners_snapped;
     } else {
-      side[v] = side_of(s[i], w);
+      side[v] = rectangle_side(s[i], w);
       vertex_s[v] = s[i];
     }
   }
@@ -542,7 +516,7 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
   }
 
   // Flipped or degenerate: signed area below a tiny fraction of the mean triangle area.
-  const double min_area = 1e-12 * w / std::max<Eigen::Index>(1, R.F.rows());
+  const double min_area = flip_area_threshold(w, R.F.rows());
   // The fallback weights, and uniform ones if those fold too.
   auto solve_with_fallback = [&] {
     R.weights = opt.fallback;

@@ -1,7 +1,7 @@
 #pragma once
 // Initial (conformal) map of a disk-topology mesh onto a rectangle [0, W] x [0, 1] (W = 1: the
-// unit square of Zou et al. 2011, seed 000 section 4.1; W = 2: the whole-brain 2:1 rectangle of
-// seed 003 section 3.4).
+// unit square of Zou et al. 2011a section 4.1; W = 2: the whole-brain 2:1 rectangle of
+// Zou et al. 2011b section 3.4).
 //
 // 1. The boundary loop is laid isometrically on the rectangle's perimeter: each boundary edge gets
 //    a share of the perimeter proportional to its 3D length, starting with a chosen anchor vertex
@@ -19,7 +19,7 @@
 //    with 1, 2 or 3 split edges become 2, 3 or 4 triangles. No triangle of the result has three
 //    collinear vertices.
 // 4. Interior: the harmonic map with this Dirichlet boundary. With the whole boundary fixed, the
-//    least-squares conformal map (Lévy et al. 2002, seed 000 ref. [24]) has the same minimiser as
+//    least-squares conformal map (Lévy et al. 2002) has the same minimiser as
 //    the cotangent-weighted harmonic map (its area term depends on the boundary only), so the
 //    cotangent system is solved. Cotangent weights can be negative on obtuse 3D triangles and
 //    then may flip a triangle; if any triangle is flipped or degenerate, the map is recomputed
@@ -28,20 +28,13 @@
 #include <string>
 #include <vector>
 
+#include "core/domain.h"
 #include "core/mesh.h"
 #include "core/sparse_cholesky.h"
 
 namespace authalic {
 
-// Rectangle perimeter coordinate: s in [0, 2W + 2), counter-clockwise from the corner (0, 0):
-// bottom side s in [0, W), right side [W, W + 1), top side [W + 1, 2W + 1) (from x = W to x = 0),
-// left side [2W + 1, 2W + 2). Values outside the range wrap around.
-Eigen::Vector2d rectangle_perimeter_point(double s, double width);
-// Perimeter coordinate of the middle of the top side, (W/2, 1).
-inline double rectangle_top_middle(double width) { return 1.5 * width + 1.0; }
-
-// Side bits of a boundary vertex (corners carry two).
-enum RectangleSide : int { kSideBottom = 1, kSideRight = 2, kSideTop = 4, kSideLeft = 8 };
+// The rectangle's perimeter coordinate, side bits and anchor positions: core/domain.h.
 
 // ClampedCotangent: the cotangent weights raised to 1 % of their mean |value|, so all are
 // positive (a Tutte embedding like mean-value weights, but symmetric: one Cholesky solve).

@@ -311,7 +311,7 @@ std::vector<OverlapPiece> sphere_grid_overlap(const MatrixXd& S, const MatrixXi&
     // its neighbours' longitudes. Edges between two non-pole corners are great-circle arcs,
     // curved in (φ, z): they are followed by bisection (follow_arc) instead of a straight line,
     // which put area of faces crossing a cell border into the wrong cell (a perfect map of a
-    // sphere read CV 1.1e-3 at 64 x 32 instead of 2.7e-5, issue 15). Edges to a pole corner are
+    // sphere read CV 1.1e-3 at 64 x 32 instead of 2.7e-5, measured). Edges to a pole corner are
     // meridians, straight in (φ, z).
     ArcPoly poly;
     int first_nonpole = -1;

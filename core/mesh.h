@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/Sparse>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -72,13 +73,25 @@ void grow_by_rings(std::vector<char>& mark, const std::vector<std::vector<int>>&
 // through vertices with allowed[v]; unreachable vertices get +inf. mm for cortical surfaces.
 VectorXd edge_path_distances(const TriMesh& mesh, const std::vector<bool>& allowed, int source);
 
+// A map triangle whose signed area is not above this counts as flipped or degenerate: a fraction
+// 1e-12 of the mean triangle area (domain_area / faces). Far above the rounding of coordinates of
+// order 1 (areas ~1e-16), far below any triangle an authalic map keeps (1 / faces).
+inline constexpr double kFlipAreaFraction = 1e-12;
+inline double flip_area_threshold(double domain_area, Eigen::Index faces) {
+  return kFlipAreaFraction * domain_area / static_cast<double>(std::max<Eigen::Index>(1, faces));
+}
+
 // Per-vertex step control (the flip-preventing steps of the flows and polishes): while some face
 // is folded (folded(f) true), every vertex of such a face halves its step lam[v] and is re-placed
 // (place(v) reads lam); after 30 rounds the steps of those vertices drop to 0 (40 rounds at most).
 // One bad face thus slows only its own vertices. Deterministic (index order).
+// 30 halvings shrink a step by 1e-9, below any move that could unfold a face, so the step is
+// then dropped; 40 rounds bound the loop when a placement keeps folding.
+inline constexpr int kStepHalvings = 30;
+inline constexpr int kStepRounds = 40;
 template <class Folded, class Place>
 void halve_steps_until_unfolded(const MatrixXi& F, VectorXd& lam, Folded folded, Place place) {
-  for (int round = 0; round < 40; ++round) {
+  for (int round = 0; round < kStepRounds; ++round) {
     std::vector<char> halve(static_cast<std::size_t>(lam.size()), 0);
     bool any = false;
     for (Eigen::Index f = 0; f < F.rows(); ++f)
@@ -87,7 +100,7 @@ void halve_steps_until_unfolded(const MatrixXi& F, VectorXd& lam, Folded folded,
     if (!any) break;
     for (Eigen::Index v = 0; v < lam.size(); ++v)
       if (halve[v]) {
-        lam[v] = round < 30 ? 0.5 * lam[v] : 0.0;
+        lam[v] = round < kStepHalvings ? 0.5 * lam[v] : 0.0;
         place(v);
       }
   }
@@ -122,6 +135,13 @@ struct TopologyReport {
   std::string summary() const;
 };
 TopologyReport analyze_topology(const MatrixXd& V, const MatrixXi& F);
+// Empty when the report is of one consistently oriented disk (what a planar map needs); else one
+// line stating the measured topology and what a planar map needs, for an InputError message.
+std::string disk_topology_problem(const TopologyReport& t);
+std::string disk_topology_problem(const MatrixXd& V, const MatrixXi& F);
+// The disk check every planar map makes, written once: the topology report of (V, F) when it is
+// one oriented disk; otherwise throws InputError("<what>: <disk_topology_problem>").
+TopologyReport require_disk(const MatrixXd& V, const MatrixXi& F, const std::string& what);
 
 // Vertices closer than `tolerance` (mm) to an earlier vertex: result(i) = index of the first copy,
 // or i itself.

@@ -70,15 +70,6 @@ Eigen::Matrix2d local_edges(const MatrixXd& P, const MatrixXi& F, Eigen::Index f
 
 }  // namespace
 
-std::string to_string(MapDomain d) {
-  switch (d) {
-    case MapDomain::Square: return "square";
-    case MapDomain::Rectangle: return "rectangle";
-    case MapDomain::Sphere: return "sphere";
-  }
-  return "unknown";
-}
-
 AbsStats abs_stats(const VectorXd& values) {
   std::vector<double> a;
   a.reserve(values.size());
@@ -171,11 +162,11 @@ VectorXd element_areas(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F,
   return cell_surface_areas(pieces, face_areas(V, F), signed_face_areas_2d(UV, F).cwiseAbs(), grid.num_cells());
 }
 
-MapMetrics map_metrics(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F, MapDomain domain, int k) {
+MapMetrics map_metrics(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F, const Domain& domain, int k) {
   MapMetrics m;
   m.domain = domain;
   m.faces = static_cast<int>(F.rows());
-  const bool sphere = domain == MapDomain::Sphere;
+  const bool sphere = !domain.planar();
   MatrixXd U = sphere ? UV.leftCols(3) : UV.leftCols(2);
   {
     std::vector<char> used(std::max(V.rows(), UV.rows()), 0);
@@ -226,26 +217,18 @@ MapMetrics map_metrics(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F,
   m.surface_area = a3.sum();
   m.domain_area = a2.sum();
 
+  m.element_cols = domain.element_cols(k);
+  m.element_rows = domain.element_rows(k);
+  const auto pieces = domain.element_overlap(U, F, k);
+  const int num_cells = m.element_cols * m.element_rows;
   VectorXd cells;
   if (sphere) {
-    SphereGridSpec grid;
-    grid.bands = k;
-    grid.sectors = 2 * k;
-    const auto pieces = sphere_grid_overlap(U, F, grid);
-    cells = cell_surface_areas(pieces, a3, piece_face_areas(pieces, m.faces), grid.num_cells());
-    m.element_cols = grid.sectors;
-    m.element_rows = grid.bands;
+    cells = cell_surface_areas(pieces, a3, piece_face_areas(pieces, m.faces), num_cells);
   } else {
-    const double width = domain == MapDomain::Rectangle ? 2.0 : 1.0;
-    m.element_cols = domain == MapDomain::Rectangle ? 2 * k : k;
-    m.element_rows = k;
-    cells = element_areas(V, U, F, width, m.element_cols, m.element_rows);
+    // Each face hands out its 3D area in proportion to its domain area in each cell; the whole
+    // face's domain area is the denominator, so a part outside the grid is lost (as it should be).
+    cells = cell_surface_areas(pieces, a3, a2, num_cells);
     // Domain area outside [0, W] x [0, 1]: the faces' total minus what the grid received.
-    GridSpec grid;
-    grid.cols = m.element_cols;
-    grid.rows = m.element_rows;
-    grid.width = width;
-    const auto pieces = grid_overlap(U, F, grid);
     double inside = 0;
     for (const auto& p : pieces) inside += p.domain_area;
     m.outside_fraction = m.domain_area > 0 ? std::max(0.0, 1.0 - inside / m.domain_area) : 0.0;

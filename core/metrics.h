@@ -6,10 +6,10 @@
 //    a map that preserves area up to one global scale scores 0; faces with zero domain area are
 //    left out of the statistics (and counted as flipped);
 //  - Υ = ln(γmax γmin) and Λ = ln(γmax / γmin) per face, γ the singular values of the affine map
-//    from the domain triangle to the surface triangle (Zou et al. 2011, seed 000, eq. 23), the
+//    from the domain triangle to the surface triangle (Zou et al. 2011a, eq. 23), the
 //    domain scaled so the total areas are equal ("totals normalised"): Υ is then exactly the
 //    face's ln area ratio above;
-//  - per vertex: the same ratio of barycentric vertex areas (seed 000 eq. 11);
+//  - per vertex: the same ratio of barycentric vertex areas (Zou et al. 2011a eq. 11);
 //  - flips: planar faces with signed area <= 0 (after un-mirroring a globally mirrored map);
 //    sphere faces whose normal points inward;
 //  - element-area coefficient of variation: the cortical area each cell of a K x K grid (2K x K on
@@ -19,11 +19,10 @@
 #include <string>
 #include <vector>
 
+#include "core/domain.h"
 #include "core/mesh.h"
 
 namespace authalic {
-
-enum class MapDomain { Square, Rectangle, Sphere };
 
 // Summary statistics of |x| over a set of values.
 struct AbsStats {
@@ -33,7 +32,7 @@ struct AbsStats {
 AbsStats abs_stats(const VectorXd& values);
 
 struct MapMetrics {
-  MapDomain domain = MapDomain::Square;
+  Domain domain;
   int faces = 0;                 // faces measured
   int vertices = 0;              // vertices used by them
   int flips = 0;                 // flipped or degenerate faces
@@ -72,20 +71,19 @@ std::string authalic_acceptance_problem(const MapMetrics& m, double vertex_mean,
 VectorXd face_log_area_ratio(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F, bool sphere = false);
 // Per-vertex signed ln area ratio of barycentric vertex areas (NaN for unused vertices).
 VectorXd vertex_log_area_ratio(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F, bool sphere = false);
-// Υ and Λ per face (seed 000 eq. 23) with the domain scaled to the surface's total area. For a
+// Υ and Λ per face (Zou et al. 2011a eq. 23) with the domain scaled to the surface's total area. For a
 // sphere map the domain triangle is the chord triangle of the normalised points. NaN where the
 // domain triangle is degenerate.
 void face_stretch_metrics(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F, VectorXd* upsilon, VectorXd* lambda,
                           bool sphere = false);
 
-// Everything above, plus element areas over a K x K grid (2K x K for Rectangle and Sphere).
-// For Square/Rectangle the grid covers [0, 1]^2 / [0, 2] x [0, 1] (the map's own coordinates).
-MapMetrics map_metrics(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F, MapDomain domain, int k = 32);
+// Everything above, plus element areas over the domain's element grid at resolution K
+// (core/domain.h: K x K on the square, 2K x K on the rectangle and the sphere), in the map's own
+// coordinates.
+MapMetrics map_metrics(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F, const Domain& domain, int k = 32);
 
 // Cortical area per element (row-major, row 0 at y = 0) for a planar map on [0, W] x [0, 1]
 // with cols x rows cells.
 VectorXd element_areas(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F, double width, int cols, int rows);
-
-std::string to_string(MapDomain d);
 
 }  // namespace authalic

@@ -2,9 +2,9 @@
 // Neumann Poisson problems on a regular cell-centred grid over a rectangle, solved exactly (for
 // the 5-point stencil) by the discrete cosine transform.
 //
-// Why: the Lie-advection flow of Zou et al. 2011 (seed 000, eq. 9-10) needs Δg = h_Ω − h_M with
-// the Neumann condition ∂g/∂n = 0 (DLF, seed 004, eq. 3). Solved on the fixed rectangle instead
-// of the degenerate flowing mesh (issue 3, "a formulation that works"), the DCT-II diagonalises
+// Why: the Lie-advection flow of Zou et al. 2011a, eq. 9-10 needs Δg = h_Ω − h_M with
+// the Neumann condition ∂g/∂n = 0 (DLF eq. 3). Solved on the fixed rectangle instead
+// of the degenerate flowing mesh (the moving mesh stalls on one thin triangle; measured), the DCT-II diagonalises
 // the grid Laplacian with reflecting (Neumann) walls, so the solve is exact and O(n log n).
 //
 // Grid convention: a field on an nx by ny grid of cells of size hx by hy over [0, nx hx] x

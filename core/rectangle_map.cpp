@@ -50,7 +50,6 @@ double bounding_diagonal(const MatrixXd& V) {
   return (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();
 }
 
-std::string topology_problem(const TopologyReport& t) { return t.summary(); }
 
 }  // namespace
 
@@ -223,6 +222,9 @@ MatrixXd lift_inserted_vertices(const ConformalMapResult& cm, const MatrixXd& V3
 // transport a slit tip needs; the plain passes do the transport (measured on fsaverage5
 // white_left cut open: 2 flipped triangles after 4 passes, element CV 0.0054) and authalic_flow
 // then repairs and polishes.
+// The slit tips' transport moves vertices across many cells per pass: at least this many RK4
+// steps per pass keep each step within about a cell (the flow's default 20 is for small moves).
+constexpr int kTransportRk4Steps = 40;
 RectanglePart map_disk(const MatrixXd& V, const MatrixXd& G, const MatrixXi& F, int anchor, double anchor_position, double width,
                        const FlowOptions& flow_options, int pre_passes, const ProgressFn& progress) {
   RectangleBoundaryMap bm;
@@ -245,7 +247,7 @@ RectanglePart map_disk(const MatrixXd& V, const MatrixXd& G, const MatrixXi& F, 
     const VectorXd target = target_face_measure(V3, cm.F, fo.density, width);
     for (int pass = 0; pass < pre_passes; ++pass) {
       report(progress, "transport", double(pass) / pre_passes, "Moser pass " + std::to_string(pass + 1));
-      UV = moser_grid_pass(target, UV, cm.F, cm.side_mask, width, fo.grid_resolution, fo.smoothing_cells, std::max(fo.rk4_steps, 40));
+      UV = moser_grid_pass(target, UV, cm.F, cm.side_mask, width, fo.grid_resolution, fo.smoothing_cells, std::max(fo.rk4_steps, kTransportRk4Steps));
     }
   }
   FlowResult fr = authalic_flow(V3, cm.F, UV, cm.side_mask, fo, progress);
@@ -264,13 +266,6 @@ RectanglePart map_disk(const MatrixXd& V, const MatrixXd& G, const MatrixXi& F, 
   part.vertex_origin = VectorXi::Constant(cm.V.rows(), -1);
   for (Eigen::Index i = 0; i < V.rows(); ++i) part.vertex_origin[i] = static_cast<int>(i);
   return part;
-}
-
-void check_disk(const MatrixXd& V, const MatrixXi& F, const std::string& what) {
-  const TopologyReport t = analyze_topology(V, F);
-  if (!t.is_disk() || !t.is_oriented())
-    throw InputError(what + " is not one oriented disk (" + topology_problem(t) +
-                     "); give the cortex face set of the hemisphere (e.g. --lh-faces-from flat_left.gii.gz)");
 }
 
 }  // namespace
@@ -302,23 +297,24 @@ HemisphereRectangles hemisphere_rectangles_from_squares(const SquareMapResult& l
   if (!(al > 0) || !(ar > 0)) throw InputError("hemisphere cortex has zero area");
   HemisphereRectangles out;
   // Widths proportional to cortical area: each unit of rectangle area holds the same cortex.
-  out.split = 2.0 * al / (al + ar);
+  const double W = Domain::rectangle().width();
+  out.split = W * al / (al + ar);
   out.left = rectangle_part_from_square(left, 0.0, out.split);
-  out.right = rectangle_part_from_square(right, out.split, 2.0 - out.split);
+  out.right = rectangle_part_from_square(right, out.split, W - out.split);
   return out;
 }
 
 HemisphereRectangles hemisphere_rectangle_map(const TriMesh& left, const TriMesh& right, const RectangleMapOptions& options,
                                               const ProgressFn& progress) {
-  check_disk(left.V, left.F, "left hemisphere cortex");
-  check_disk(right.V, right.F, "right hemisphere cortex");
   // Each hemisphere's square map (its anatomical rule: outward faces, frontal pole at the top
   // middle, so the right part is the mirror image of the left), then stretched to its share.
   // The right one is computed as the left one of its mirror image and mirrored back, so a right
   // hemisphere that is the mirror of a left one gives exactly the mirrored map.
   SquareMapOptions so;
   so.flow = options.flow;
+  so.region_name = "left hemisphere cortex";
   const SquareMapResult l = square_map(left.V, left.F, so, progress);
+  so.region_name = "right hemisphere cortex";
   MatrixXd V = right.V;
   MatrixXi F = right.F;
   V.col(0) = -V.col(0);
@@ -335,7 +331,7 @@ WholeBrainRectangle whole_brain_rectangle_map(const TriMesh& mesh, const Rectang
   const TopologyReport t = analyze_topology(mesh.V, mesh.F);
   if (!t.is_sphere() || !t.is_oriented())
     throw InputError("surface is not a closed genus-0 surface (" + t.summary() +
-                     "); the one-surface rectangle needs a closed, oriented, genus-0 whole-brain surface (or use --lh/--rh)");
+                     "); the one-surface rectangle needs a closed, oriented, genus-0 whole-brain surface");
   int from = options.cut_from, to = options.cut_to;
   if (from < 0 || to < 0) {
     const auto lm = inferior_medial_landmarks(mesh.V, mesh.F);
@@ -354,7 +350,8 @@ WholeBrainRectangle whole_brain_rectangle_map(const TriMesh& mesh, const Rectang
   // ellipsoid works from the surface (0 flips, element CV 0.002) but not from the sphere image
   // (the flow's repair fails), fsaverage5 white_left the other way round (surface: 458 flips;
   // sphere image: 0 flips, element CV 0.006).
-  // The anterior landmark goes to the middle of the left side (perimeter coordinate 2W + 1.5).
+  // The anterior landmark goes to the middle of the left side.
+  const double W = Domain::rectangle().width();
   auto attempt = [&](bool on_sphere) {
     MatrixXd G = cut.mesh.V;
     if (on_sphere) {
@@ -364,9 +361,9 @@ WholeBrainRectangle whole_brain_rectangle_map(const TriMesh& mesh, const Rectang
       const SphereMapResult sr = authalic_sphere_map(mesh, so);
       out.sphere_flips = sr.flips;
       for (Eigen::Index i = 0; i < G.rows(); ++i) G.row(i) = sr.sphere.row(cut.vertex_origin[i]);
-      return map_disk(cut.mesh.V, G, cut.mesh.F, from, 2.0 * 2.0 + 1.5, 2.0, options.flow, options.transport_passes, progress);
+      return map_disk(cut.mesh.V, G, cut.mesh.F, from, rectangle_left_middle(W), W, options.flow, options.transport_passes, progress);
     }
-    return map_disk(cut.mesh.V, cut.mesh.V, cut.mesh.F, from, 2.0 * 2.0 + 1.5, 2.0, options.flow, options.transport_passes, progress);
+    return map_disk(cut.mesh.V, cut.mesh.V, cut.mesh.F, from, rectangle_left_middle(W), W, options.flow, options.transport_passes, progress);
   };
   auto acceptable = [](const RectanglePart& p, int* flips, double* face_error) {
     *flips = count_flipped(p.UV, p.F);

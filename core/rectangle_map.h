@@ -1,10 +1,10 @@
 #pragma once
 // Authalic maps of the whole brain onto the 2:1 rectangle [0, 2] x [0, 1] (height : width = 1 : 2;
-// Zou et al. 2011, seed 000 section 5.2; seed 003 section 4), in two forms:
+// Zou et al. 2011a section 5.2; 2011b section 4), in two forms:
 //
 // (a) One closed genus-0 surface: cut open along a path on the inferior-medial side between two
 //     landmark vertices ("sliced open along the medial plane at the bottom, without passing any
-//     significant anatomical features", seed 003 section 4), which yields a disk; the disk is
+//     significant anatomical features", Zou et al. 2011b section 4), which yields a disk; the disk is
 //     mapped like the square map with W = 2 (core/conformal_map.h: boundary by arc length on the
 //     perimeter, harmonic interior; core/authalic_flow.h: Moser/Lie flow on [0, 2] x [0, 1]),
 //     the initial map computed on the authalic sphere image of the surface (see below).
@@ -20,8 +20,9 @@
 //     symmetric brain gives a symmetric rectangle.
 //
 // Anatomical rule of each hemisphere part (a disk: the cortex without the medial wall): the
-// boundary vertex nearest to the most anterior cortex vertex goes to the middle of the part's
-// top side; the map is seen from outside (lateral surface facing the viewer, no mirror).
+// square map's (core/square_map.h anterior_boundary_anchor: the boundary point nearest to the
+// most anterior cortex vertex goes to the middle of the part's top side); the map is seen from
+// outside (lateral surface facing the viewer, no mirror).
 #include <string>
 #include <utility>
 #include <vector>
@@ -121,6 +122,7 @@ WholeBrainRectangle whole_brain_rectangle_map(const TriMesh& mesh, const Rectang
 struct HemisphereRectangles {
   RectanglePart left, right;
   double split = 1.0;  // w_L: the parts meet on x = split
+  Domain domain() const { return Domain::rectangle(split); }  // the rectangle with its seam
 };
 HemisphereRectangles hemisphere_rectangle_map(const TriMesh& left_cortex, const TriMesh& right_cortex,
                                               const RectangleMapOptions& options = {}, const ProgressFn& progress = {});

@@ -39,8 +39,8 @@ bool SpdSolver::compute(const SparseMatrix& A) {
     impl_->inner.clear();
   }
   // Measured on fsaverage5 (2 cores, reference BLAS): Eigen's simplicial LDLT is as fast or faster
-  // up to ~100k unknowns (the flow's local systems, B1's initial map); CHOLMOD with METIS wins on
-  // the largest (B3's 150k-vertex initial map: 3.2 s vs 3.5 s). Simplicial, not supernodal: on a
+  // up to ~100k unknowns (the flow's local systems, benchmark B1's initial map); CHOLMOD with METIS wins on
+  // the largest (benchmark B3's 150k-vertex initial map: 3.2 s vs 3.5 s). Simplicial, not supernodal: on a
   // 158k-vertex native pial region (lnz 4.8M) a numeric refactorisation takes 0.85 s against 1.15 s
   // through reference BLAS's dense kernels, and no BLAS means no BLAS-dependent rounding. METIS
   // only: CHOLMOD's default also tries AMD first, which costs more than it saves on surface meshes.

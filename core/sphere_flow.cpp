@@ -5,7 +5,6 @@
 #include <Eigen/CholmodSupport>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -366,7 +365,7 @@ double polish_sphere_face_areas(MatrixXd& S, const MatrixXi& F, const VectorXd& 
   // regional error exceeds 5 % (regional_log_area_ratio), and 3 rings around them, judged on
   // those faces' own error: a few hundred crushed faces never move the global error by 1 %, but
   // they can hold a whole element's excess (fs741 pial: element CV 0.00523 -> 0.00506 with the
-  // regional set; fsaverage5 S1-S3 and fs741 white unchanged).
+  // regional set; fsaverage5 spheres S1 (docs/references.md) and fs741 white unchanged).
   const std::vector<std::vector<int>> adj = vertex_neighbours(F, nv);
   for (int it = 0; it < iterations; ++it) {
     const double k = a.sum() / measure.sum();
@@ -457,7 +456,7 @@ class SphereBackground {
     return g;
   }
 
-  // Per-vertex tangent gradient: area-weighted mean of the incident face gradients (cf. seed 000
+  // Per-vertex tangent gradient: area-weighted mean of the incident face gradients (cf. Zou et al. 2011a
   // eq. 16, with area instead of angle weights), projected to the sphere's tangent plane
   // (eqs. 21-22).
   MatrixXd vertex_gradients(const VectorXd& g) const {
@@ -564,14 +563,11 @@ MatrixXd moser_sphere_flow(const MatrixXd& S0, const MatrixXi& F, const VectorXd
     throw ProcessingError("sphere flow: the face measure must be non-negative with a positive total");
   const int n = options.grid_cells > 0 ? options.grid_cells : auto_grid_cells(F.rows());
   report(progress, "sphere", 0.0, "background grid " + std::to_string(n) + " cells per cube edge");
-  const auto t_setup = std::chrono::steady_clock::now();
   const SphereBackground bg(n);
-  const double seconds_setup = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_setup).count();
   const Eigen::Index nbv = bg.grid.vertices().rows();
   if (out_report) {
     out_report->grid_cells = n;
     out_report->grid_vertices = static_cast<int>(nbv);
-    out_report->seconds_setup = seconds_setup;
     out_report->passes.clear();
   }
   // The measure, scaled so that its total is the background's area (mean density 1).
@@ -580,7 +576,6 @@ MatrixXd moser_sphere_flow(const MatrixXd& S0, const MatrixXi& F, const VectorXd
   MatrixXd S = S0;
   for (Eigen::Index v = 0; v < S.rows(); ++v) S.row(v).normalize();
   for (int pass = 0; pass < options.max_passes; ++pass) {
-    const auto t_pass = std::chrono::steady_clock::now();
     const VectorXd W = rasterise_measure(bg, S, F, measure);
     const VectorXd rho = W.cwiseQuotient(bg.mass);
     SphereFlowPass info;
@@ -659,7 +654,6 @@ MatrixXd moser_sphere_flow(const MatrixXd& S0, const MatrixXi& F, const VectorXd
       next.row(v) = x.transpose();
     }
     S.swap(next);
-    info.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_pass).count();
     if (out_report) out_report->passes.push_back(info);
     std::ostringstream msg;
     msg << "pass " << pass + 1 << ": density " << info.rho_min << ".." << info.rho_max << ", " << steps << " RK4 steps";

@@ -1,24 +1,24 @@
 #pragma once
 // Area-restoring flow on the unit sphere: Moser's construction (Dominitz & Tannenbaum 2010,
-// seed 001, section 4.2), which is the Lie advection of Zou et al. 2011 (seed 000, eqs. 9-10,
+// Dominitz & Tannenbaum 2010 section 4.2), which is the Lie advection of Zou et al. 2011a (eqs. 9-10,
 // sphere case section 4.5.2, eqs. 21-22) integrated in the fixed frame of the sphere.
 //
 // Given a map S of a mesh onto the unit sphere and the measure each face should occupy (its
 // cortical area), let rho be the density "surface measure / sphere area" of the current map,
 // normalised to mean 1. Then with
-//     Delta g = rho - 1                        (seed 001: Delta Theta = 1 - mu, Theta = -g)
+//     Delta g = rho - 1                        (Dominitz & Tannenbaum 2010: Delta Theta = 1 - mu, Theta = -g)
 //     u_t     = grad g / ((1 - t) rho + t),    t in [0, 1]
 // the flow d/dt x = u_t(x) pushes the measure rho dA to the uniform measure dA (continuity
 // equation: d/dt[(1-t) rho + t] + div(((1-t) rho + t) u_t) = (1 - rho) + Delta g = 0).
 //
 // The Poisson problem is solved on a FIXED fine background mesh of the sphere (an equiangular
 // cube-sphere, cotangent Laplacian factorised once), not on the moving mesh: its triangles never
-// degenerate, and the measured pitfall of the moving-mesh flow (issue 3: one thin triangle
+// degenerate, and the measured pitfall of the moving-mesh flow (measured: one thin triangle
 // throttles the adaptive step) cannot occur. The density is rasterised onto the background by
 // splatting area-weighted samples of every mapped triangle into the background hat functions
 // (a lumped L2 projection of the measure); vertices move by RK4 through u_t, the velocity
-// projected to the tangent plane (seed 000 eqs. 21-22) and each stage pulled back to the sphere
-// (seed 000 section 4.5.2). A pass is repeated on its own result to remove the discretisation
+// projected to the tangent plane (Zou et al. 2011a eqs. 21-22) and each stage pulled back to the sphere
+// (Zou et al. 2011a section 4.5.2). A pass is repeated on its own result to remove the discretisation
 // error of the previous one.
 #include <vector>
 
@@ -64,13 +64,11 @@ struct SphereFlowPass {
   double rho_min = 0, rho_max = 0;     // background density range at the start of the pass
   double rho_abs_log_mean = 0;         // mean |ln rho| over background vertices (area-weighted)
   int rk4_steps = 0;
-  double seconds = 0;                  // wall time of the pass
 };
 
 struct SphereFlowReport {
   int grid_cells = 0;
   int grid_vertices = 0;
-  double seconds_setup = 0;            // background grid and factorisation
   std::vector<SphereFlowPass> passes;
 };
 

@@ -179,7 +179,7 @@ MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const Sphe
   for (Eigen::Index f = 0, k = 0; f < F.rows(); ++f)
     if (!in_cap[f]) FB.row(k++) = F.row(f);
   const MatrixXi& FC = cap.F;
-  const std::string cap_problem = disk_topology_problem(V, FC), rest_problem = disk_topology_problem(V, FB);
+  const std::string cap_problem = disk_topology_problem(cap.topology), rest_problem = disk_topology_problem(V, FB);
   if (!cap.is_disk() || !cap_problem.empty() || !rest_problem.empty())
     throw ProcessingError("sphere (square route): the cut did not give two disks (cap: " +
                           (cap_problem.empty() ? std::string("a disk") : cap_problem) + "; rest: " +

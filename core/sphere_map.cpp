@@ -6,7 +6,6 @@
 #include <Eigen/SVD>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <numeric>
 #include <sstream>
@@ -18,9 +17,7 @@ namespace authalic {
 namespace {
 
 using Vec3 = Eigen::Vector3d;
-using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // Weighted median of values (weights >= 0): the smallest value whose cumulative weight reaches half.
 double weighted_median(const VectorXd& values, const VectorXd& w) {
@@ -136,7 +133,8 @@ MatrixXd mobius_centre(const MatrixXd& S0, const VectorXd& w, int max_iterations
     if (!a.allFinite()) a = 0.75 * c;
     if (a.norm() > 0.5) a *= 0.5 / a.norm();  // stay well inside the ball
     // Backtracking: accept only steps that shrink the centroid.
-    for (int k = 0; k < 30; ++k) {
+    constexpr int kMaxBacktracks = 30;  // halvings: 2^-30 of the Newton step, below any useful move
+    for (int k = 0; k < kMaxBacktracks; ++k) {
       MatrixXd T = apply(S, a);
       const Vec3 ct = centroid(T);
       if (ct.norm() < c.norm()) {
@@ -282,7 +280,6 @@ SphereMapResult authalic_sphere_map(const TriMesh& mesh, const SphereMapOptions&
 
   SphereMapResult result;
   if (options.route != SphereRoute::Flow) {
-    const auto t1 = Clock::now();
     std::string why;
     try {
       MatrixXd S = sphere_from_square_map(V, F, options.square_route, &result.square_route, progress);
@@ -293,7 +290,6 @@ SphereMapResult authalic_sphere_map(const TriMesh& mesh, const SphereMapOptions&
       why = e.what();
     }
     result.route = SphereRoute::Square;
-    result.seconds_flow = seconds_since(t1);
     result.conformal = result.sphere;  // this route has no conformal sphere
     if (why.empty() || options.route == SphereRoute::Square) return result;
     report(progress, "sphere", -1, why + "; taking the flow route");
@@ -301,7 +297,6 @@ SphereMapResult authalic_sphere_map(const TriMesh& mesh, const SphereMapOptions&
     result.fallback_reason = why;
   }
   result.route = SphereRoute::Flow;
-  const auto t0 = Clock::now();
   report(progress, "conformal", 0.0, "factorising the cotangent matrix");
   const HakerConformalSolver haker(V, F);
   const VectorXd w = barycentric_vertex_areas(V, F);
@@ -342,18 +337,15 @@ SphereMapResult authalic_sphere_map(const TriMesh& mesh, const SphereMapOptions&
   }
   result.conformal_flips = best_flips;
   if (best_flips > 0) result.repaired_vertices += repair_sphere_flips(result.conformal, F);
-  result.seconds_conformal = seconds_since(t0);
   {
     std::ostringstream msg;
     msg << "puncture face " << result.puncture_face << ", " << result.conformal_flips << " flipped faces";
     report(progress, "conformal", 1.0, msg.str());
   }
 
-  const auto t1 = Clock::now();
   MatrixXd S = result.conformal;
   if (options.flow) S = moser_sphere_flow(S, F, face_areas(V, F), options.flow_options, &result.flow, progress);
   finish_sphere(V, F, options, S, result);
-  result.seconds_flow = seconds_since(t1);
   if (options.orient) result.conformal = result.conformal * result.rotation.transpose();
   return result;
 }

@@ -1,6 +1,6 @@
 #pragma once
 // Authalic (area-preserving) map of a closed genus-0 surface onto the unit sphere:
-//   1. conformal initial map by Haker et al. 2000 (seed 002, sections 2-3): puncture one
+//   1. conformal initial map by Haker et al. 2000, sections 2-3: puncture one
 //      triangle, solve D x = a, D y = b with the cotangent matrix D (eqs. 5-7), inverse
 //      stereographic projection (section 3.4);
 //   2. Moebius normalisation: the conformal map is unique up to a Moebius transformation of the
@@ -19,7 +19,7 @@
 
 namespace authalic {
 
-// Haker's conformal map with the puncture p in face `puncture_face` = ABC (seed 002 eq. 7; the
+// Haker's conformal map with the puncture p in face `puncture_face` = ABC (Haker et al. 2000 eq. 7; the
 // right-hand side a - i b holds the derivatives of the hat functions of A, B, C along the face's
 // u axis (A to B) and v axis (toward C), which do not depend on where p lies in the face).
 // Inputs: V #V by 3, F #F by 3 (closed, genus 0, outward oriented).
@@ -31,9 +31,9 @@ class HakerConformalSolver {
   ~HakerConformalSolver();
   HakerConformalSolver(const HakerConformalSolver&) = delete;
   HakerConformalSolver& operator=(const HakerConformalSolver&) = delete;
-  // The planar conformal coordinates z = x + i y (#V by 2) of seed 002 eq. 7.
+  // The planar conformal coordinates z = x + i y (#V by 2) of Haker et al. 2000 eq. 7.
   MatrixXd planar_map(int puncture_face) const;
-  // planar_map followed by inverse stereographic projection (seed 002 section 3.4, step 3).
+  // planar_map followed by inverse stereographic projection (Haker et al. 2000 section 3.4, step 3).
   MatrixXd sphere_map(int puncture_face) const;
 
  private:
@@ -101,7 +101,6 @@ struct SphereMapResult {
   int flips = 0;                // flipped faces of the final map
   double mobius_residual = 0;   // |area centroid| after normalisation
   SphereFlowReport flow;
-  double seconds_conformal = 0, seconds_flow = 0;
 };
 
 // The whole pipeline. Throws InputError when the mesh is not a closed, oriented, genus-0

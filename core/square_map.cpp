@@ -1,9 +1,8 @@
 // Region -> authalic square map, with the anatomical orientation rule (see core/square_map.h).
 #include "core/square_map.h"
 
-#include <chrono>
-
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "core/error.h"
@@ -11,23 +10,6 @@
 #include "core/stretch_energy.h"
 
 namespace authalic {
-
-std::string disk_topology_problem(const MatrixXd& V, const MatrixXi& F) {
-  if (F.rows() == 0) return "the region has no faces; a square map needs a disk-shaped region";
-  const TopologyReport t = analyze_topology(V, F);
-  if (t.is_disk() && t.is_oriented()) return {};
-  std::ostringstream s;
-  s << "the region is not one disk (" << t.summary() << "; " << t.num_components << " component(s), "
-    << t.num_boundary_loops << " boundary loop(s), genus " << t.genus << ")";
-  if (t.num_boundary_loops == 0) {
-    s << "; a closed surface needs a cortex region (--label, --patch or --faces-from) or the sphere map";
-  } else if (!t.is_oriented()) {
-    s << "; its faces are not consistently oriented";
-  } else {
-    s << "; a square map needs exactly one component with one boundary loop and no handles";
-  }
-  return s.str();
-}
 
 std::string region_geometry_problem(const MatrixXd& V, const MatrixXi& F) {
   // Cortical coordinates are within a few hundred mm; 1e38 overflows every area and angle.
@@ -49,6 +31,35 @@ std::string region_geometry_problem(const MatrixXd& V, const MatrixXi& F) {
            std::to_string(degenerate.front()) + (degenerate.size() == static_cast<std::size_t>(F.rows()) ? "; the region is collapsed to a point or a line" : "") +
            "); remove or repair them (e.g. merge the coincident vertices) before mapping";
   return {};
+}
+
+bool orient_outward(const MatrixXd& V, MatrixXi& F) {
+  // Σ (c_f − C)·(e1 x e2)/2 is the signed volume (x3) of the cone from C over the region:
+  // positive when the faces point away from the hemisphere's centre.
+  const Eigen::Vector3d C = V.colwise().mean().transpose();
+  double vol = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector3d a = V.row(F(f, 0)).transpose(), b = V.row(F(f, 1)).transpose(), c = V.row(F(f, 2)).transpose();
+    vol += ((a + b + c) / 3.0 - C).dot((b - a).cross(c - a));
+  }
+  if (!(vol < 0)) return false;
+  F.col(1).swap(F.col(2));
+  return true;
+}
+
+int anterior_boundary_anchor(const MatrixXd& V, const MatrixXi& F, RectangleBoundaryMap& boundary) {
+  int anterior = -1;
+  double best = -std::numeric_limits<double>::infinity();
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int v = F(f, c);
+      // Ties broken by the lowest index, so the rule does not depend on face order.
+      if (V(v, 1) > best || (V(v, 1) == best && v < anterior)) best = V(v, 1), anterior = v;
+    }
+  boundary.use_anchor_point = true;
+  boundary.anchor_point = V.row(anterior).transpose();
+  boundary.anchor_position = rectangle_top_middle(boundary.width);
+  return anterior;
 }
 
 MatrixXd extend_to_inserted(const MatrixXd& values, const MatrixXi& parents, const VectorXd& weight) {
@@ -103,10 +114,10 @@ int keep_orientation_in_single_precision(const MatrixXd& V, const MatrixXi& F, c
 SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const SquareMapOptions& opt, const ProgressFn& progress) {
   if (V.cols() != 3) throw InputError("surface: vertex coordinates must be 3D; give a 3D surface");
   if (!(opt.width > 0)) throw InputError("square map: the rectangle width must be positive");
-  const std::string problem = disk_topology_problem(V, F_in);
-  if (!problem.empty()) throw InputError("region: " + problem);
+  if (!opt.region_topology || !disk_topology_problem(*opt.region_topology).empty())
+    require_disk(V, F_in, opt.region_name);
   const std::string geometry = region_geometry_problem(V, F_in);
-  if (!geometry.empty()) throw InputError("region: " + geometry);
+  if (!geometry.empty()) throw InputError(opt.region_name + ": " + geometry);
   if (opt.density.size() > 0) {
     if (opt.density.size() != V.rows())
       throw InputError("density: " + std::to_string(opt.density.size()) + " values for " + std::to_string(V.rows()) +
@@ -125,45 +136,17 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   R.num_input_vertices = static_cast<int>(V.rows());
   MatrixXi F = F_in;
 
-  // Rule 1: outward orientation. Σ (c_f − C)·(e1 x e2)/2 is the signed volume (x3) of the cone
-  // from C over the region: positive when the faces point away from the hemisphere's centre.
-  if (opt.orient_outward) {
-    const Eigen::Vector3d C = V.colwise().mean().transpose();
-    double vol = 0;
-    for (Eigen::Index f = 0; f < F.rows(); ++f) {
-      const Eigen::Vector3d a = V.row(F(f, 0)).transpose(), b = V.row(F(f, 1)).transpose(), c = V.row(F(f, 2)).transpose();
-      vol += ((a + b + c) / 3.0 - C).dot((b - a).cross(c - a));
-    }
-    if (vol < 0) {
-      F.col(1).swap(F.col(2));
-      R.faces_reversed = true;
-    }
-  }
-
-  // Rule 2: the frontal pole's nearest boundary point goes to the top middle.
+  if (opt.orient_outward) R.faces_reversed = orient_outward(V, F);
   RectangleBoundaryMap b;
   b.width = opt.width;
   b.sliding_boundary = opt.sliding_initial_boundary;
   b.flip_dividing_edges = opt.flip_dividing_edges;
   if (opt.stretch_start) b.fallback = HarmonicWeights::ClampedCotangent;
   b.try_cotangent = !opt.stretch_start || opt.cotangent_start;
-  if (opt.anatomical_anchor) {
-    double best = -std::numeric_limits<double>::infinity();
-    for (Eigen::Index f = 0; f < F.rows(); ++f)
-      for (int c = 0; c < 3; ++c) {
-        const int v = F(f, c);
-        // Ties broken by the lowest index, so the rule does not depend on face order.
-        if (V(v, 1) > best || (V(v, 1) == best && v < R.anterior_vertex)) best = V(v, 1), R.anterior_vertex = v;
-      }
-    b.use_anchor_point = true;
-    b.anchor_point = V.row(R.anterior_vertex).transpose();
-    b.anchor_position = rectangle_top_middle(opt.width);
-  }
+  if (opt.anatomical_anchor) R.anterior_vertex = anterior_boundary_anchor(V, F, b);
   report(progress, "initial", -1, "conformal map");
-  const auto t0 = std::chrono::steady_clock::now();
   SpdSolver solver;  // one analysis for the conformal map's systems and the stretch-energy steps
   ConformalMapResult init = conformal_rectangle_map(V, F, b, &solver);
-  const auto t1 = std::chrono::steady_clock::now();
   R.surface_area = face_areas(init.V, init.F).sum();
   {
     std::ostringstream msg;
@@ -177,16 +160,15 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   if (opt.density.size() > 0) fo.density = extend_to_inserted(opt.density, init).col(0);
   MatrixXd start = init.UV;
   if (opt.stretch_start) {
+    report(progress, "stretch", -1, "stretch-energy start");
     const VectorXd target = target_face_measure(init.V, init.F, fo.density, opt.width);
     start = stretch_energy_map(init.V, init.F, target, init.UV, init.side_mask, opt.width, opt.stretch, &R.stretch, &solver);
     std::ostringstream msg;
     msg << "stretch-energy start: " << R.stretch.iterations << " iterations, mean |ln stretch| per face "
         << R.stretch.initial_log_stretch << " -> " << R.stretch.final_log_stretch;
-    report(progress, "initial", -1, msg.str());
+    report(progress, "stretch", -1, msg.str());
   }
   FlowResult flow = authalic_flow(init.V, init.F, start, init.side_mask, fo, progress);
-  R.seconds_initial = std::chrono::duration<double>(t1 - t0).count();
-  R.seconds_flow = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
 
   R.V = std::move(init.V);
   R.F = std::move(init.F);
@@ -204,8 +186,7 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
     throw ProcessingError("square map: the flow left " + std::to_string(R.flips) +
                           " folded triangles that the repair could not remove (per-vertex mean |ln area ratio| " +
                           std::to_string(R.flow.final_vertex_mean) +
-                          "); the map is not authalic. Check the region for degenerate triangles, or try a finer grid "
-                          "(--grid 1024)");
+                          "); the map is not authalic. Check the region for degenerate triangles, or try a finer flow grid");
   return R;
 }
 

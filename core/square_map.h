@@ -1,7 +1,7 @@
 #pragma once
 // One call from a cortical region (a disk on a hemisphere surface) to its authalic map on the
-// unit square (or any rectangle [0, W] x [0, 1]): the square map of Zou et al. 2011 (seed 000,
-// seed 003 section 3) with the measure control of DLF (seed 004 section 5.5).
+// unit square (or any rectangle [0, W] x [0, 1]): the square map of Zou et al. 2011a (and 2011b
+// section 3) with the measure control of DLF section 5.5.
 //
 //   square_map(V, F_region) = authalic_flow(conformal_rectangle_map(V, F_region))
 //
@@ -19,6 +19,7 @@
 // Output indexing: V's vertices first, in V's order (those outside the region stay, unused by any
 // face), then the vertices inserted by corner and ear splits; faces are the region's faces with
 // split ones replaced by their pieces.
+#include <optional>
 #include <string>
 
 #include "core/authalic_flow.h"
@@ -47,6 +48,11 @@ struct SquareMapOptions {
   // See RectangleBoundaryMap::flip_dividing_edges: true keeps the input's vertex list when every
   // dividing edge can be flipped (all fsaverage5 and fs741 regions measured); false splits them all.
   bool flip_dividing_edges = true;
+  // The region's name in error messages ("region", "left hemisphere cortex", ...).
+  std::string region_name = "region";
+  // The caller's require_disk report of (V, F) (e.g. from reading the cortex region): the disk
+  // check is then not made a second time.
+  std::optional<TopologyReport> region_topology;
 };
 
 struct SquareMapResult {
@@ -65,19 +71,22 @@ struct SquareMapResult {
   StretchEnergyReport stretch;
   FlowReport flow;
   int flips = 0;             // flipped or degenerate faces of UV (0 unless something failed)
-  double seconds_initial = 0;  // wall time of the conformal initial map
-  double seconds_flow = 0;     // wall time of the flow (passes, repair, polish)
 };
 
-// Empty when (V, F) is one disk; otherwise a one-line description of the measured topology and
-// what a square map needs, for an InputError message.
-std::string disk_topology_problem(const MatrixXd& V, const MatrixXi& F);
 // "" when the region's geometry can be mapped, else what is wrong: a vertex that is not finite or
 // beyond 1e6 mm, or degenerate (zero-area) triangles.
 std::string region_geometry_problem(const MatrixXd& V, const MatrixXi& F);
 
+// Rule 1: reverses every face of F when the region's faces point into the hemisphere (the
+// signed volume of the cone from the centroid of V over F is negative); returns whether it did.
+bool orient_outward(const MatrixXd& V, MatrixXi& F);
+// Rule 2, the hemisphere anchor written once: the point of the boundary of F nearest to the most
+// anterior vertex of F (largest y; ties: lowest index) is placed at the middle of the top side of
+// boundary.width's rectangle (sets boundary's anchor point and position). Returns that vertex.
+int anterior_boundary_anchor(const MatrixXd& V, const MatrixXi& F, RectangleBoundaryMap& boundary);
+
 // The map. V: #V x 3 (mm, RAS), F: region faces (a disk). Throws InputError when the region is
-// not a disk (message from disk_topology_problem) or the density is invalid, ProcessingError if
+// not a disk (message from require_disk) or the density is invalid, ProcessingError if
 // the result still has flipped triangles.
 SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F, const SquareMapOptions& options,
                            const ProgressFn& progress = {});

@@ -51,7 +51,7 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
 
   MatrixXd UV = UV0.leftCols(2);
   VectorXd area = signed_face_areas_2d(UV, F);
-  const double min_area = 1e-12 * area.sum() / std::max<Eigen::Index>(1, nf);
+  const double min_area = flip_area_threshold(area.sum(), nf);
   const double st = face_target.sum();
   double err = mean_log_stretch(area, face_target);
   if (report) report->initial_log_stretch = report->final_log_stretch = err;

@@ -2,7 +2,7 @@
 // A sulcal-depth proxy for shading pictures when no FreeSurfer `sulc` file is given: the depth
 // of each vertex below a heavily smoothed copy of the surface (mm, positive in sulci, negative
 // on gyral crowns, area-weighted mean 0), like FreeSurfer's sulc, which integrates the normal
-// movement of each vertex during inflation (Fischl et al. 1999, seed 003 ref. [4]).
+// movement of each vertex during inflation (Fischl et al. 1999).
 //
 // The smoothed surface is one implicit heat-flow step (M - t L) P = M V (mean-curvature-flow
 // style smoothing with the fixed cotangent Laplacian L and barycentric mass M), with

@@ -10,6 +10,7 @@
 #include <tuple>
 #include <unordered_map>
 
+#include "core/error.h"
 #include "core/mesh.h"
 #include "core/union_find.h"
 
@@ -353,6 +354,34 @@ std::string TopologyReport::summary() const {
   if (degenerate_faces > 0) s << ", " << degenerate_faces << " degenerate faces";
   if (duplicate_faces > 0) s << ", " << duplicate_faces << " duplicate faces";
   return s.str();
+}
+
+std::string disk_topology_problem(const TopologyReport& t) {
+  if (t.num_faces == 0) return "it has no faces; a map onto a planar domain needs a disk";
+  if (t.is_disk() && t.is_oriented()) return {};
+  std::ostringstream s;
+  s << "it is not one disk (" << t.summary() << ")";
+  if (t.num_boundary_loops == 0) {
+    s << "; it is a closed surface: map a region of it (a disk), or the whole surface with the sphere map";
+  } else if (!t.is_oriented()) {
+    s << "; its faces are not consistently oriented";
+  } else {
+    s << "; a planar map needs exactly one component with one boundary loop and no handles";
+  }
+  return s.str();
+}
+
+std::string disk_topology_problem(const MatrixXd& V, const MatrixXi& F) {
+  if (F.rows() == 0) return disk_topology_problem(TopologyReport{});
+  return disk_topology_problem(analyze_topology(V, F));
+}
+
+TopologyReport require_disk(const MatrixXd& V, const MatrixXi& F, const std::string& what) {
+  TopologyReport t;
+  if (F.rows() > 0) t = analyze_topology(V, F);
+  const std::string problem = disk_topology_problem(t);
+  if (!problem.empty()) throw InputError(what + ": " + problem);
+  return t;
 }
 
 void grow_by_rings(std::vector<char>& mark, const std::vector<std::vector<int>>& adj, int rings) {

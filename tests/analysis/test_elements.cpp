@@ -52,8 +52,8 @@ TEST(Elements, ValueOfLinearFieldIsItsValueAtTheElementCentroid) {
   const MatrixXd V = warp(square.V);
   VectorXd values(V.rows());
   for (int v = 0; v < V.rows(); ++v) values(v) = f3(V.row(v).transpose());
-  const ElementMap m = prepare_element_map(V, square.F, square.V, square.F, values, ElementDomain::Square);
-  const ElementGrid g = element_grid(ElementDomain::Square, 7);  // cells not aligned with the triangles
+  const ElementMap m = prepare_element_map(V, square.F, square.V, square.F, values, Domain::square());
+  const ElementGrid g = element_grid(Domain::square(), 7);  // cells not aligned with the triangles
   Eigen::Matrix4d shift = Eigen::Matrix4d::Identity();
   shift.block<3, 1>(0, 3) = Eigen::Vector3d(1, 2, 3);
   const ElementResult r = compute_elements(m, g, shift);
@@ -80,8 +80,8 @@ TEST(Elements, IsometricMapGivesEqualAreasAndDeterministicResults) {
   const TriMesh square = grid_square(30);
   const MatrixXd V = 10.0 * square.V;  // 10 x 10 mm flat cortex: the map is authalic
   const VectorXd values = VectorXd::LinSpaced(V.rows(), 0.0, 1.0);
-  const ElementMap m = prepare_element_map(V, square.F, square.V, square.F, values, ElementDomain::Square);
-  const ElementGrid g = element_grid(ElementDomain::Square, 8);
+  const ElementMap m = prepare_element_map(V, square.F, square.V, square.F, values, Domain::square());
+  const ElementGrid g = element_grid(Domain::square(), 8);
   omp_set_num_threads(1);
   const ElementResult a = compute_elements(m, g);
   omp_set_num_threads(2);
@@ -101,7 +101,7 @@ TEST(Elements, MapInMillimetresIsRescaledAndWrongDomainRefused) {
   // The flat surface scaled to the cortical area (a 10 mm square starting at -5).
   MatrixXd mm = (10.0 * square.V).array() - 5.0;
   mm.col(2).setZero();
-  const ElementMap m = prepare_element_map(V, square.F, mm, square.F, values, ElementDomain::Square, "flat.surf.gii");
+  const ElementMap m = prepare_element_map(V, square.F, mm, square.F, values, Domain::square(), "flat.surf.gii");
   EXPECT_NEAR(m.D.maxCoeff(), 1.0, 1e-12);
   EXPECT_NEAR(m.D.minCoeff(), 0.0, 1e-12);
   ASSERT_EQ(m.notes.size(), 1u);
@@ -109,7 +109,7 @@ TEST(Elements, MapInMillimetresIsRescaledAndWrongDomainRefused) {
   MatrixXd wide = square.V;
   wide.col(0) *= 3.0;
   try {
-    prepare_element_map(V, square.F, wide, square.F, values, ElementDomain::Square, "wide.surf.gii");
+    prepare_element_map(V, square.F, wide, square.F, values, Domain::square(), "wide.surf.gii");
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("wide.surf.gii: the map spans"), std::string::npos) << e.what();
@@ -117,11 +117,11 @@ TEST(Elements, MapInMillimetresIsRescaledAndWrongDomainRefused) {
   // ... but it fits the rectangle once rescaled (aspect 3 does not).
   MatrixXd rect = square.V;
   rect.col(0) *= 2.0;
-  EXPECT_NO_THROW(prepare_element_map(V, square.F, rect, square.F, values, ElementDomain::Rectangle));
-  EXPECT_THROW(prepare_element_map(V, square.F, wide, square.F, values, ElementDomain::Rectangle), InputError);
+  EXPECT_NO_THROW(prepare_element_map(V, square.F, rect, square.F, values, Domain::rectangle()));
+  EXPECT_THROW(prepare_element_map(V, square.F, wide, square.F, values, Domain::rectangle()), InputError);
   // Wrong sizes.
-  EXPECT_THROW(prepare_element_map(V, square.F, square.V.topRows(10), square.F.topRows(2), values, ElementDomain::Square), InputError);
-  EXPECT_THROW(prepare_element_map(V, square.F, square.V, square.F, VectorXd::Ones(3), ElementDomain::Square), InputError);
+  EXPECT_THROW(prepare_element_map(V, square.F, square.V.topRows(10), square.F.topRows(2), values, Domain::square()), InputError);
+  EXPECT_THROW(prepare_element_map(V, square.F, square.V, square.F, VectorXd::Ones(3), Domain::square()), InputError);
 }
 
 TEST(Elements, VerticesAppendedByTheFlatteningAreTracedToTheirEdge) {
@@ -137,19 +137,19 @@ TEST(Elements, VerticesAppendedByTheFlatteningAreTracedToTheirEdge) {
   UV << 0, 0, 1, 0, 1, 1, 0, 1, 0.6, 0.45;
   MatrixXi MF(4, 3);
   MF << 0, 1, 4, 1, 2, 4, 2, 3, 4, 3, 0, 4;
-  const ElementMap m = prepare_element_map(V, F, UV, MF, values, ElementDomain::Square);
+  const ElementMap m = prepare_element_map(V, F, UV, MF, values, Domain::square());
   EXPECT_EQ(m.inserted_vertices, 1);
   EXPECT_TRUE(m.V3.row(4).isApprox(Eigen::RowVector3d(5, 5, 2)));
   EXPECT_DOUBLE_EQ(m.values(4), 3.0);
   // The 3D area is the surface's (the split does not change it), in one 1x1 element.
-  const ElementResult r = compute_elements(m, element_grid(ElementDomain::Square, 1));
+  const ElementResult r = compute_elements(m, element_grid(Domain::square(), 1));
   EXPECT_NEAR(r.block.elements[0].area_mm2, face_areas(V, F).sum(), 1e-9);
   EXPECT_EQ(r.block.elements[0].n_vertices, 4);  // only the surface's own vertices are counted
   // A map vertex that splits no edge of the surface (a point inside triangle 0-1-2) is refused.
   MatrixXi inside(4, 3);
   inside << 0, 1, 4, 1, 2, 4, 2, 0, 4, 0, 2, 3;
   try {
-    prepare_element_map(V, F, UV, inside, values, ElementDomain::Square, "split.surf.gii");
+    prepare_element_map(V, F, UV, inside, values, Domain::square(), "split.surf.gii");
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("split.surf.gii: map vertex 4"), std::string::npos) << e.what();
@@ -159,8 +159,8 @@ TEST(Elements, VerticesAppendedByTheFlatteningAreTracedToTheirEdge) {
 TEST(Elements, SphereCellsOfARoundSphereHaveEqualAreas) {
   const TriMesh s = test::sphere_mesh(5, 50.0);
   const VectorXd values = s.V.col(2);  // z: linear
-  const ElementMap m = prepare_element_map(s.V, s.F, s.V / 50.0, s.F, values, ElementDomain::Sphere);
-  const ElementGrid g = element_grid(ElementDomain::Sphere, 4);
+  const ElementMap m = prepare_element_map(s.V, s.F, s.V / 50.0, s.F, values, Domain::sphere());
+  const ElementGrid g = element_grid(Domain::sphere(), 4);
   EXPECT_EQ(g.cols, 8);
   EXPECT_EQ(g.rows, 4);
   const ElementResult r = compute_elements(m, g);
@@ -173,7 +173,7 @@ TEST(Elements, SphereCellsOfARoundSphereHaveEqualAreas) {
     EXPECT_LT(e.value, z_hi + 1.0);
     EXPECT_NEAR(e.value, e.centroid.z(), 1e-9);  // linear value: its value at the centroid
   }
-  EXPECT_THROW(prepare_element_map(s.V, s.F, s.V.array() + 30.0, s.F, values, ElementDomain::Sphere), InputError);
+  EXPECT_THROW(prepare_element_map(s.V, s.F, s.V.array() + 30.0, s.F, values, Domain::sphere()), InputError);
 }
 
 TEST(Elements, TableRoundTripAndCorruptFilesAreRefused) {
@@ -182,10 +182,10 @@ TEST(Elements, TableRoundTripAndCorruptFilesAreRefused) {
   VectorXd values(V.rows());
   for (int v = 0; v < V.rows(); ++v) values(v) = f3(V.row(v).transpose()) / 3.0;
   values(0) = std::nan("");
-  const ElementMap m = prepare_element_map(V, square.F, square.V, square.F, values, ElementDomain::Square);
-  const ElementResult r = compute_elements(m, element_grid(ElementDomain::Square, 4));
+  const ElementMap m = prepare_element_map(V, square.F, square.V, square.F, values, Domain::square());
+  const ElementResult r = compute_elements(m, element_grid(Domain::square(), 4));
   ElementTable t;
-  t.grid = element_grid(ElementDomain::Square, 4);
+  t.grid = element_grid(Domain::square(), 4);
   t.blocks = {{"left", r.block.elements}, {"right", r.block.elements}};
   t.normalisation = "global";
   t.units = "ratio to the global cortical mean";
@@ -227,12 +227,12 @@ TEST(Elements, TableRoundTripAndCorruptFilesAreRefused) {
   for (std::size_t b = 0; b < 2; ++b)
     for (std::size_t i = 0; i < 16; ++i) EXPECT_EQ(w.blocks[b].elements[i].area_mm2, u.blocks[b].elements[i].area_mm2);
   ElementTable rect;
-  rect.grid = element_grid(ElementDomain::Rectangle, 2);
-  rect.grid.seam_x = 1.25;
+  rect.grid = element_grid(Domain::rectangle(), 2);
+  rect.grid.domain.seam_x = 1.25;
   rect.blocks = {{"both", std::vector<Element>(8)}};
   for (int e = 0; e < 8; ++e) rect.blocks[0].elements[static_cast<std::size_t>(e)] = Element{e, e / 4, e % 4};
   write_element_table(dir + "/r.tsv", rect);
-  EXPECT_EQ(read_element_table(dir + "/r.tsv").grid.seam_x, 1.25);
+  EXPECT_EQ(read_element_table(dir + "/r.tsv").grid.domain.seam_x, 1.25);
   // Corruptions: a bad number, a missing row, a missing sidecar.
   std::string csv;
   {
@@ -277,9 +277,9 @@ TEST(ElementsRealData, AuthalicSquareMapHasEqualAreaElementsConformalDoesNot) {
   const FlowResult flow = authalic_flow(conformal.V, conformal.F, conformal.UV, conformal.side_mask, FlowOptions{});
   ASSERT_EQ(flow.report.flips, 0);
   const VectorXd values = white.mesh.V.col(1);  // y: any per-vertex field
-  const ElementGrid g = element_grid(ElementDomain::Square, 32);
-  const ElementMap cm = prepare_element_map(white.mesh.V, F, conformal.UV, conformal.F, values, ElementDomain::Square);
-  const ElementMap am = prepare_element_map(white.mesh.V, F, flow.UV, conformal.F, values, ElementDomain::Square);
+  const ElementGrid g = element_grid(Domain::square(), 32);
+  const ElementMap cm = prepare_element_map(white.mesh.V, F, conformal.UV, conformal.F, values, Domain::square());
+  const ElementMap am = prepare_element_map(white.mesh.V, F, flow.UV, conformal.F, values, Domain::square());
   EXPECT_EQ(am.inserted_vertices, static_cast<int>(conformal.V.rows() - white.mesh.V.rows()));
   // Traced positions equal the flattening's own inserted vertices on the conformal map (its
   // boundary is isometric, so corner splits are read back exactly). On the authalic map boundary

@@ -36,7 +36,7 @@ TEST(ElementMapOrientation, MirroredHemisphereTracesItsInsertedVertices) {
   const VectorXd values = VectorXd::LinSpaced(right.V.rows(), 0.0, 1.0);
   for (const auto* m : {&l, &r}) {
     const TriMesh& s = m == &l ? left : right;
-    const ElementMap em = prepare_element_map(s.V, s.F, m->UV, m->F, values, ElementDomain::Square, "map");
+    const ElementMap em = prepare_element_map(s.V, s.F, m->UV, m->F, values, Domain::square(), "map");
     EXPECT_EQ(em.inserted_vertices, m->V.rows() - s.V.rows());
     // Inserted vertices sit on the surface where the flattening put them.
     EXPECT_LT((em.V3 - m->V).cwiseAbs().maxCoeff(), 1e-9);
@@ -57,7 +57,7 @@ TEST(ElementMapOrientation, MirroredFsaverage5LeftHemisphereAsARightOne) {
   ASSERT_TRUE(r.faces_reversed);
   ASSERT_GT(r.V.rows(), right.V.rows());
   const VectorXd values = VectorXd::Ones(right.V.rows());
-  const ElementMap em = prepare_element_map(right.V, F, r.UV, r.F, values, ElementDomain::Square, "right square map");
+  const ElementMap em = prepare_element_map(right.V, F, r.UV, r.F, values, Domain::square(), "right square map");
   EXPECT_EQ(em.inserted_vertices, r.V.rows() - right.V.rows());
   EXPECT_LT((em.V3 - r.V).cwiseAbs().maxCoeff(), 1e-6);
 }

@@ -13,7 +13,7 @@
 namespace authalic::analysis {
 namespace {
 
-ElementTable make_table(ElementDomain domain, int k, const std::vector<std::string>& hemis, const std::string& id,
+ElementTable make_table(const Domain& domain, int k, const std::vector<std::string>& hemis, const std::string& id,
                         const std::vector<double>& values, double age = std::nan("")) {
   ElementTable t;
   t.grid = element_grid(domain, k);
@@ -48,7 +48,7 @@ TEST(Normative, ZScoresEqualHandComputationOnATinyTable) {
   const std::vector<std::vector<double>> controls = {{1.0, 2.0, 3.0, 4.0}, {2.0, 2.0, 5.0, 4.5}, {3.0, 2.0, 4.0, 5.0}};
   NormativeReference ref;
   for (std::size_t s = 0; s < controls.size(); ++s) {
-    const ElementTable t = make_table(ElementDomain::Square, 2, {"left"}, "c" + std::to_string(s), controls[s]);
+    const ElementTable t = make_table(Domain::square(), 2, {"left"}, "c" + std::to_string(s), controls[s]);
     if (s == 0) ref = empty_reference_like(t);
     add_subject(ref, t, "c" + std::to_string(s) + ".csv");
   }
@@ -58,7 +58,7 @@ TEST(Normative, ZScoresEqualHandComputationOnATinyTable) {
   EXPECT_DOUBLE_EQ(ref.sd(0), 1.0);
   EXPECT_DOUBLE_EQ(ref.sd(1), 0.0);
   EXPECT_DOUBLE_EQ(ref.sd(3), 0.5);
-  const ElementTable patient = make_table(ElementDomain::Square, 2, {"left"}, "p", {0.0, 2.0, 5.5, 3.0});
+  const ElementTable patient = make_table(Domain::square(), 2, {"left"}, "p", {0.0, 2.0, 5.5, 3.0});
   // Default: the predictive SD of a new control, SD x sqrt(1 + 1/n) = SD x sqrt(4/3) for n = 3.
   const Comparison p = compare_to_reference(ref, patient);
   EXPECT_TRUE(p.predictive);
@@ -108,7 +108,7 @@ std::vector<ElementTable> cohort(int subjects, bool with_ages) {
     const double age = 50.0 + 2.5 * s + 3 * noise(s, 99);
     for (int i = 0; i < 32; ++i) v[static_cast<std::size_t>(i)] = 1.0 + 0.01 * i - 0.004 * age + 0.05 * noise(s, i);
     if (s == 3) v[5] = std::nan("");  // a missing element value
-    tables.push_back(make_table(ElementDomain::Square, 4, {"left", "right"}, "s" + std::to_string(s), v,
+    tables.push_back(make_table(Domain::square(), 4, {"left", "right"}, "s" + std::to_string(s), v,
                                 with_ages ? age : std::nan("")));
   }
   return tables;
@@ -124,7 +124,7 @@ TEST(Normative, RescalingToTheReferenceRemovesTheGlobalNormalisationShift) {
   for (int s = 0; s < 12; ++s) {
     std::vector<double> v(kN);
     for (int i = 0; i < kN; ++i) v[static_cast<std::size_t>(i)] = 1.0 + 0.01 * (i % 7) + 0.04 * noise(s, i);
-    const ElementTable t = make_table(ElementDomain::Square, kK, {"left"}, "c" + std::to_string(s), v);
+    const ElementTable t = make_table(Domain::square(), kK, {"left"}, "c" + std::to_string(s), v);
     if (s == 0) ref = empty_reference_like(t);
     add_subject(ref, t, t.subject_id + ".csv");
   }
@@ -136,7 +136,7 @@ TEST(Normative, RescalingToTheReferenceRemovesTheGlobalNormalisationShift) {
     if (in) lesion.push_back(i);
     p[static_cast<std::size_t>(i)] = 1.05 * ref.mean[static_cast<std::size_t>(i)] * (in ? 0.7 : 1.0);
   }
-  const ElementTable patient = make_table(ElementDomain::Square, kK, {"left"}, "p", p);
+  const ElementTable patient = make_table(Domain::square(), kK, {"left"}, "p", p);
   const Comparison r = compare_to_reference(ref, patient);
   ASSERT_TRUE(r.rescaled);
   EXPECT_NEAR(r.scale, 1 / 1.05, 1e-12);
@@ -157,7 +157,7 @@ TEST(Normative, RescalingToTheReferenceRemovesTheGlobalNormalisationShift) {
   EXPECT_GT(g.num_hyper, kN / 2) << "the global-normalisation shift alone should flag most healthy elements";
   // A healthy control (exactly the reference mean) keeps factor 1 and no flags.
   std::vector<double> h(ref.mean.begin(), ref.mean.end());
-  const Comparison c = compare_to_reference(ref, make_table(ElementDomain::Square, kK, {"left"}, "h", h));
+  const Comparison c = compare_to_reference(ref, make_table(Domain::square(), kK, {"left"}, "h", h));
   EXPECT_NEAR(c.scale, 1.0, 1e-12);
   EXPECT_EQ(c.num_hypo + c.num_hyper, 0);
 }
@@ -268,20 +268,20 @@ TEST(Normative, IncompatibleInputsAreRefusedWithAClearError) {
   t.normalisation = "reference-region";
   t.units = "SUVR";
   expect_refusal(t, "other.csv: the intensity normalisation is reference-region but the reference has global");
-  t = make_table(ElementDomain::Square, 2, {"left", "right"}, "x", std::vector<double>(8, 1.0));
+  t = make_table(Domain::square(), 2, {"left", "right"}, "x", std::vector<double>(8, 1.0));
   expect_refusal(t, "other.csv: K is 2 but the reference has 4");
-  t = make_table(ElementDomain::Square, 4, {"left"}, "x", std::vector<double>(16, 1.0));
+  t = make_table(Domain::square(), 4, {"left"}, "x", std::vector<double>(16, 1.0));
   t.normalisation = "global";
   t.units = ref.units;
   expect_refusal(t, "the hemisphere list is left but the reference has left,right");
   t = tables[1];
   expect_refusal(t, "subject 's1' is already in the reference");
   // Merging references of different K, or sharing a subject, is refused too.
-  const NormativeReference other = build_from({make_table(ElementDomain::Square, 2, {"left", "right"}, "y", std::vector<double>(8, 1.0))}, 0, 1);
+  const NormativeReference other = build_from({make_table(Domain::square(), 2, {"left", "right"}, "y", std::vector<double>(8, 1.0))}, 0, 1);
   EXPECT_THROW(merge_references(ref, other), InputError);
   EXPECT_THROW(merge_references(ref, build_from(tables, 2, 4)), InputError);
   // Comparing a patient of another domain.
-  const ElementTable rect = make_table(ElementDomain::Rectangle, 4, {"left", "right"}, "p", std::vector<double>(64, 1.0));
+  const ElementTable rect = make_table(Domain::rectangle(), 4, {"left", "right"}, "p", std::vector<double>(64, 1.0));
   EXPECT_THROW(compare_to_reference(ref, rect), InputError);
   // A corrupt or future reference file.
   const std::string dir = test::temp_dir("normative_refusal");
@@ -309,12 +309,12 @@ TEST(Normative, ClustersFollowTheDomainsNeighbourhoods) {
   flags[1 * 8 + 7] = 1;   // column 7: touches column 0 only on the sphere
   flags[2 * 8 + 5] = -1;  // diagonal neighbour of (1, 4)
   int count = 0;
-  const auto square_like = label_clusters(element_grid(ElementDomain::Rectangle, 4), flags, &count);
+  const auto square_like = label_clusters(element_grid(Domain::rectangle(), 4), flags, &count);
   EXPECT_EQ(count, 4);  // {3}, {4, (2,5)}, {0}, {7}
   EXPECT_NE(square_like[11], square_like[12]);
   EXPECT_EQ(square_like[12], square_like[21]);
   EXPECT_NE(square_like[8], square_like[15]);
-  const auto sphere = label_clusters(element_grid(ElementDomain::Sphere, 4), flags, &count);
+  const auto sphere = label_clusters(element_grid(Domain::sphere(), 4), flags, &count);
   EXPECT_EQ(count, 2);  // {3, 4, (2,5)} across longitude; {0, 7} wrapping around
   EXPECT_EQ(sphere[11], sphere[12]);
   EXPECT_EQ(sphere[8], sphere[15]);
@@ -322,20 +322,20 @@ TEST(Normative, ClustersFollowTheDomainsNeighbourhoods) {
   // and 5 join and the seam runs between columns 5 and 6; a one-surface rectangle has no seam.
   std::vector<int> run(32, 0);
   for (int c = 3; c <= 6; ++c) run[1 * 8 + c] = -1;
-  ElementGrid wide = element_grid(ElementDomain::Rectangle, 4);
-  wide.seam_x = 1.5;
+  ElementGrid wide = element_grid(Domain::rectangle(), 4);
+  wide.domain.seam_x = 1.5;
   const auto unequal = label_clusters(wide, run, &count);
   EXPECT_EQ(count, 2);
   EXPECT_EQ(unequal[11], unequal[13]);
   EXPECT_NE(unequal[13], unequal[14]);
-  wide.seam_x = std::nan("");
+  wide.domain.seam_x = std::nan("");
   label_clusters(wide, run, &count);
   EXPECT_EQ(count, 1);
   // Opposite signs never join.
   std::vector<int> mixed(16, 0);
   mixed[0] = -1;
   mixed[1] = 1;
-  label_clusters(element_grid(ElementDomain::Square, 4), mixed, &count);
+  label_clusters(element_grid(Domain::square(), 4), mixed, &count);
   EXPECT_EQ(count, 2);
 }
 

@@ -97,9 +97,9 @@ Hemisphere load_and_map(const std::string& name, const std::string& fs) {
 }
 
 ElementResult elements_of(const Hemisphere& h, const VectorXd& values) {
-  const ElementMap m = prepare_element_map(h.white.mesh.V, h.cortex_faces, h.uv, h.flat_F, values, ElementDomain::Square,
+  const ElementMap m = prepare_element_map(h.white.mesh.V, h.cortex_faces, h.uv, h.flat_F, values, Domain::square(),
                                            h.name + " square map");
-  return compute_elements(m, element_grid(ElementDomain::Square, kK), h.white.to_scanner);
+  return compute_elements(m, element_grid(Domain::square(), kK), h.white.to_scanner);
 }
 
 // As analysis/pipeline.cpp steps 3 and 4 (sampling, normalisation, elements).
@@ -119,7 +119,7 @@ ElementTable subject_table(std::vector<Hemisphere>& hemis, const CohortRow& s) {
   all << values[0], values[1];
   const Normalisation norm = global_cortical_mean(all, V, F);
   ElementTable table;
-  table.grid = element_grid(ElementDomain::Square, kK);
+  table.grid = element_grid(Domain::square(), kK);
   table.normalisation = to_string(norm.kind);
   table.units = norm.units.empty() ? pet.units : norm.units;
   table.subject_id = s.id;

@@ -17,7 +17,7 @@ namespace {
 
 analysis::ElementTable table(const std::string& id, double age, const std::function<double(int)>& value) {
   analysis::ElementTable t;
-  t.grid = analysis::element_grid(analysis::ElementDomain::Square, 4);
+  t.grid = analysis::element_grid(Domain::square(), 4);
   t.normalisation = "global";
   t.units = "ratio to the global cortical mean";
   t.subject_id = id;
@@ -118,7 +118,7 @@ TEST(NormativeCli, BuildMergeCompare) {
 
   // Incompatible patient (K = 2 table) -> exit 2 with the reason.
   analysis::ElementTable small = table("p2", 60, [](int) { return 1.0; });
-  small.grid = analysis::element_grid(analysis::ElementDomain::Square, 2);
+  small.grid = analysis::element_grid(Domain::square(), 2);
   small.blocks[0].elements.resize(4);
   for (auto& e : small.blocks[0].elements) {
     e.row = e.id / 2;

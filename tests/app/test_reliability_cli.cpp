@@ -106,7 +106,7 @@ TEST(ReliabilityCli, SymlinkOutputIsWrittenThroughAndADanglingOneRefused) {
 
 analysis::ElementTable control(const std::string& id, double value) {
   analysis::ElementTable t;
-  t.grid = analysis::element_grid(analysis::ElementDomain::Square, 2);
+  t.grid = analysis::element_grid(Domain::square(), 2);
   t.subject_id = id;
   t.units = "ratio";
   analysis::ElementBlock b;

@@ -167,7 +167,7 @@ TEST(HardMeshMaps, SquareMapOfValidHardMeshesIsCorrect) {
       continue;
     }
     expect_correct_square_map(r, c.name);
-    const MapMetrics mm = map_metrics(r.V, r.UV, r.F, MapDomain::Square, 8);
+    const MapMetrics mm = map_metrics(r.V, r.UV, r.F, Domain::square(), 8);
     EXPECT_EQ(mm.flips, 0) << c.name;
     EXPECT_LT(mm.outside_fraction, 1e-9) << c.name;
     EXPECT_LT(mm.vertex_ln_area.mean, c.max_vertex_mean)
@@ -348,7 +348,7 @@ TEST(HardMeshMaps, SphereMapOfValidHardMeshesIsCorrect) {
       continue;
     }
     expect_correct_sphere_map(c.mesh, r, c.name);
-    const MapMetrics mm = map_metrics(c.mesh.V, r.sphere, c.mesh.F, MapDomain::Sphere, 8);
+    const MapMetrics mm = map_metrics(c.mesh.V, r.sphere, c.mesh.F, Domain::sphere(), 8);
     // The needles of sliver_sphere (height 0.002 of their base) get a poor share of the sphere
     // (per-face mean 0.49, p99 4.9: below the background grid's resolution) while the cortical
     // area per element stays even; so the median and the element CV are asserted, not the mean.
@@ -416,7 +416,7 @@ TEST(HardMeshMaps, NearlyClosedRegionCompressedByTheConformalMapComesOutAuthalic
   // The conformal start compresses some triangles by more than 10^3 against others.
   const VectorXd start = face_log_area_ratio(r.V, r.UV_initial, r.F);
   EXPECT_GT(start.maxCoeff() - start.minCoeff(), std::log(1e3));
-  const MapMetrics m = map_metrics(r.V, r.UV, r.F, MapDomain::Square, 32);
+  const MapMetrics m = map_metrics(r.V, r.UV, r.F, Domain::square(), 32);
   EXPECT_EQ(m.flips, 0);
   EXPECT_LE(m.element_cv, 0.01);
   EXPECT_LE(m.vertex_ln_area.mean, 0.01);

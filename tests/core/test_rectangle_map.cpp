@@ -161,7 +161,7 @@ TEST(RectangleMap, ClosedSurfaceFillsTheTwoToOneRectangle) {
   EXPECT_NEAR(p.UV_initial(r.cut_path.back(), 1), 0.5, 1e-6);
   EXPECT_NEAR(p.UV(r.cut_path.front(), 0), 0.0, 1e-12);
   EXPECT_NEAR(p.UV(r.cut_path.back(), 0), 2.0, 1e-12);
-  const MapMetrics mm = map_metrics(p.V, p.UV, p.F, MapDomain::Rectangle, 8);
+  const MapMetrics mm = map_metrics(p.V, p.UV, p.F, Domain::rectangle(), 8);
   EXPECT_EQ(mm.flips, 0);
   EXPECT_LT(mm.element_cv, 0.02);
   // The part keeps the surface's area (the initial map's splits move no 3D point off its face;
@@ -225,5 +225,5 @@ TEST(RectangleMap, RectangleFromSquareMapsIsTheirAffineStretch) {
   UV << h.left.UV, h.right.UV;
   MatrixXi F(l.F.rows() + r.F.rows(), 3);
   F << h.left.F, (h.right.F.array() + static_cast<int>(l.V.rows())).matrix();
-  EXPECT_LE(map_metrics(V, UV, F, MapDomain::Rectangle, 8).element_cv, 0.02);
+  EXPECT_LE(map_metrics(V, UV, F, Domain::rectangle(), 8).element_cv, 0.02);
 }

@@ -163,7 +163,7 @@ TEST(SphereFlow, RestoresAUniformMapFromAMoebiusDistortedOne) {
   // (density ratio ~ 16:1 across the sphere); the flow must bring it back up to a rotation.
   const TriMesh m = icosphere(4);
   const MatrixXd S0 = mobius(m.V, Eigen::Vector3d(0, 0, 0.6));
-  const MapMetrics before = map_metrics(m.V, S0, m.F, MapDomain::Sphere, 8);
+  const MapMetrics before = map_metrics(m.V, S0, m.F, Domain::sphere(), 8);
   EXPECT_GT(before.face_ln_area.mean, 0.5);
   SphereFlowOptions o;
   o.grid_cells = 32;
@@ -172,7 +172,7 @@ TEST(SphereFlow, RestoresAUniformMapFromAMoebiusDistortedOne) {
   EXPECT_EQ(report.grid_cells, 32);
   ASSERT_EQ(static_cast<int>(report.passes.size()), o.max_passes);
   EXPECT_LT(report.passes.back().rho_abs_log_mean, 0.05 * report.passes.front().rho_abs_log_mean);
-  const MapMetrics after = map_metrics(m.V, S, m.F, MapDomain::Sphere, 8);
+  const MapMetrics after = map_metrics(m.V, S, m.F, Domain::sphere(), 8);
   EXPECT_EQ(after.flips, 0);
   EXPECT_LT(after.face_ln_area.mean, 0.01);
   EXPECT_LT(after.element_cv, 0.005);
@@ -248,7 +248,7 @@ TEST(SphereMap, UnevenlyTriangulatedSphereEndsCloseToTheIdentity) {
   EXPECT_LT(ang.mean(), 0.012);
   EXPECT_LT(ang.maxCoeff(), 0.08);
   EXPECT_LE(ang.mean(), ang_conformal.mean());
-  const MapMetrics metrics = map_metrics(m.V, r.sphere, m.F, MapDomain::Sphere, 16);
+  const MapMetrics metrics = map_metrics(m.V, r.sphere, m.F, Domain::sphere(), 16);
   EXPECT_LT(metrics.face_ln_area.mean, 0.01);
   // The orientation rule on a round sphere centred at the origin is the identity itself.
   for (Eigen::Index i = 0; i < m.V.rows(); ++i) EXPECT_LT((r.sphere.row(i) - m.V.row(i)).norm(), 0.1);

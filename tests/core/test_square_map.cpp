@@ -69,8 +69,8 @@ TEST(SquareMap, FlatSquareStaysTheIdentity) {
 TEST(SquareMap, NonUniformPlanarDiskEndsWithEqualVertexAreas) {
   const TriMesh m = test::uneven_disk();  // triangle areas span about 1:1000
   const SquareMapResult r = square_map(m.V, m.F, test_options());
-  const MapMetrics before = map_metrics(r.V, r.UV_initial, r.F, MapDomain::Square, 8);
-  const MapMetrics after = map_metrics(r.V, r.UV, r.F, MapDomain::Square, 8);
+  const MapMetrics before = map_metrics(r.V, r.UV_initial, r.F, Domain::square(), 8);
+  const MapMetrics after = map_metrics(r.V, r.UV, r.F, Domain::square(), 8);
   EXPECT_GT(before.vertex_ln_area.mean, 0.03);  // a disk's conformal square map stretches the corners
   EXPECT_EQ(after.flips, 0);
   EXPECT_LT(after.vertex_ln_area.mean, 0.01);
@@ -141,7 +141,7 @@ TEST(SquareMap, SameBitsForOneAndTwoThreads) {
 TEST(SquareMap, CurvedPatchMeetsTheAccuracyTargets) {
   const TriMesh m = curved_cap();
   const SquareMapResult r = square_map(m.V, m.F, test_options());
-  const MapMetrics mm = map_metrics(r.V, r.UV, r.F, MapDomain::Square, 8);
+  const MapMetrics mm = map_metrics(r.V, r.UV, r.F, Domain::square(), 8);
   EXPECT_EQ(mm.flips, 0);
   EXPECT_LT(mm.vertex_ln_area.mean, 0.01);
   EXPECT_LT(mm.element_cv, 0.01);

@@ -188,7 +188,7 @@ TEST(SphereFromSquare, SpherePolishRestoresPerturbedAreas) {
   for (Eigen::Index v = 0; v < S.rows(); ++v)
     S.row(v) = (S.row(v) + Eigen::RowVector3d(n(rng), n(rng), n(rng))).normalized();
   ASSERT_EQ(sphere_flipped_faces(S, s.F), 0);
-  const double before = map_metrics(s.V, S, s.F, MapDomain::Sphere, 8).face_ln_area.mean;
+  const double before = map_metrics(s.V, S, s.F, Domain::sphere(), 8).face_ln_area.mean;
   const double after = polish_sphere_face_areas(S, s.F, target, 10, 200);
   EXPECT_EQ(sphere_flipped_faces(S, s.F), 0);
   EXPECT_LT((S.rowwise().norm().array() - 1).abs().maxCoeff(), 1e-12);
@@ -204,7 +204,7 @@ TEST(SphereFromSquare, NearlyRoundSurfaceCoversTheSphereOnceWithEqualAreas) {
   const MatrixXd S = sphere_from_square_map(e.V, e.F, {}, &rep);
   EXPECT_TRUE(sphere_covers_once(S, e.F));
   EXPECT_NEAR(rep.cap_area_fraction, 0.1, 0.02);
-  const MapMetrics m = map_metrics(e.V, S, e.F, MapDomain::Sphere, 8);
+  const MapMetrics m = map_metrics(e.V, S, e.F, Domain::sphere(), 8);
   EXPECT_EQ(m.flips, 0);
   EXPECT_LT(m.element_cv, 0.02);
   EXPECT_LT(m.face_ln_area.mean, 0.02);
@@ -228,7 +228,7 @@ TEST(SphereFromSquare, CoarseSpherePassDoesNoHarmWhereNothingIsLeft) {
   const MatrixXd S1 = sphere_from_square_map(e.V, e.F, {}, &rep);
   ASSERT_EQ(rep.sphere_flow.passes.size(), 1u);
   EXPECT_TRUE(sphere_covers_once(S1, e.F));
-  const MapMetrics m0 = map_metrics(e.V, S0, e.F, MapDomain::Sphere, 16), m1 = map_metrics(e.V, S1, e.F, MapDomain::Sphere, 16);
+  const MapMetrics m0 = map_metrics(e.V, S0, e.F, Domain::sphere(), 16), m1 = map_metrics(e.V, S1, e.F, Domain::sphere(), 16);
   EXPECT_EQ(m1.flips, 0);
   EXPECT_LT(m1.element_cv, 0.003);
   // Measured with the great-circle cells: 4.6e-4 without the pass, 5.1e-4 with it, both at the
