@@ -33,7 +33,7 @@ struct FlattenArgs {
   std::string method = "grid";
   int k = 32;
   int grid = 512;
-  int passes = FlowOptions{}.max_passes;
+  int passes = GridFlowOptions{}.max_passes;
   int fixed_steps = 0;
   int iterations = 200;
   bool no_polish = false;
@@ -132,24 +132,6 @@ void write_flat(const std::string& path, const MatrixXd& XY, const MatrixXi& F, 
   io::write_surface(path, TriMesh{P, F}, wo);
 }
 
-nlohmann::json flow_json(const FlowReport& r, const FlowOptions& o) {
-  return {{"method", to_string(r.method)},
-          {"iterations", r.iterations},
-          {"polish_iterations", r.polish_iterations},
-          {"converged", r.converged},
-          {"stop_reason", r.stop_reason},
-          {"tolerance", {{"vertex_ln_area_abs_mean", o.tolerance_mean}, {"vertex_ln_area_abs_p99", o.tolerance_p99}}},
-          {"grid_resolution", o.grid_resolution},
-          {"rk4_steps", o.rk4_steps},
-          {"fixed_steps", o.fixed_steps},
-          {"edge_flips", r.edge_flips},
-          {"repaired_vertices", r.repaired},
-          {"flips", r.flips},
-          {"vertex_ln_area_abs_mean_history", r.history_mean},
-          {"initial_vertex_ln_area_abs", {{"mean", r.initial_vertex_mean}, {"p99", r.initial_vertex_p99}}},
-          {"final_vertex_ln_area_abs", {{"mean", r.final_vertex_mean}, {"p99", r.final_vertex_p99}, {"max", r.final_vertex_max}}}};
-}
-
 void run(const FlattenArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const int given = !a.faces_from.empty() + !a.label.empty() + !a.patch.empty();
@@ -180,11 +162,11 @@ void run(const FlattenArgs& a) {
 
   SquareMapOptions options;
   options.flow.method = a.method == "mesh" ? FlowMethod::Mesh : FlowMethod::Grid;
-  options.flow.grid_resolution = a.grid;
-  options.flow.max_passes = a.passes;
-  options.flow.fixed_steps = a.fixed_steps;
-  options.flow.max_iterations = a.iterations;
-  options.flow.polish = !a.no_polish;
+  options.flow.grid.resolution = a.grid;
+  options.flow.grid.max_passes = a.passes;
+  options.flow.mesh.fixed_steps = a.fixed_steps;
+  options.flow.mesh.max_iterations = a.iterations;
+  options.flow.polish.enabled = !a.no_polish;
   options.flip_dividing_edges = !a.split_dividing_edges;
   options.stretch_start = a.start == "stretch";
   if (!a.density.empty()) options.density = io::read_per_vertex(a.density, mesh.num_vertices());

@@ -105,14 +105,7 @@ nlohmann::json part_json(const RectanglePart& p) {
           {"faces", p.F.rows()},
           {"anchor_vertex", p.anchor_vertex},
           {"initial_flips", p.initial_flips},
-          {"flow",
-           {{"method", to_string(p.flow.method)},
-            {"iterations", p.flow.iterations},
-            {"polish_iterations", p.flow.polish_iterations},
-            {"converged", p.flow.converged},
-            {"stop_reason", p.flow.stop_reason},
-            {"repaired_vertices", p.flow.repaired},
-            {"flips", p.flow.flips}}}};
+          {"flow", flow_json(p.flow, RectangleMapOptions{}.flow)}};
 }
 
 // The surfaces the command writes, named once for the writers and the up-front path checks

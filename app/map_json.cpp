@@ -96,4 +96,23 @@ MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int
   return extend_to_inserted(V.leftCols(3), parents, weight);  // the flattening's own rule
 }
 
+nlohmann::json flow_json(const FlowReport& r, const FlowOptions& o) {
+  return {{"method", to_string(r.method)},
+          {"iterations", r.iterations},
+          {"rejected_passes", r.rejected_passes},
+          {"polish_iterations", r.polish_iterations},
+          {"converged", r.converged},
+          {"stop_reason", r.stop_reason},
+          {"tolerance", {{"vertex_ln_area_abs_mean", o.tolerance_mean}, {"vertex_ln_area_abs_p99", o.tolerance_p99}}},
+          {"grid_resolution", o.grid.resolution},
+          {"rk4_steps", o.grid.rk4_steps},
+          {"fixed_steps", o.mesh.fixed_steps},
+          {"edge_flips", r.edge_flips},
+          {"repaired_vertices", r.repaired},
+          {"flips", r.flips},
+          {"vertex_ln_area_abs_mean_history", r.history_mean},
+          {"initial_vertex_ln_area_abs", {{"mean", r.initial_vertex_mean}, {"p99", r.initial_vertex_p99}}},
+          {"final_vertex_ln_area_abs", {{"mean", r.final_vertex_mean}, {"p99", r.final_vertex_p99}, {"max", r.final_vertex_max}}}};
+}
+
 }  // namespace authalic::app

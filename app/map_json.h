@@ -6,6 +6,7 @@
 #include <map>
 #include <string>
 
+#include "core/authalic_flow.h"
 #include "core/metrics.h"
 
 namespace authalic::app {
@@ -18,6 +19,9 @@ nlohmann::json metrics_json(const MapMetrics& m);
 // The acceptance record of a map (core/metrics.h): passed, the problem ("" if passed) and the
 // limits, the element CV's on the grid named by `grid` (e.g. "32x32").
 nlohmann::json acceptance_json(const std::string& problem, const std::string& grid);
+
+// The flow's report and the options it ran with (flatten's and rectangle's "flow" object).
+nlohmann::json flow_json(const FlowReport& r, const FlowOptions& o);
 
 // Writes JSON (2-space indent, trailing newline) atomically.
 void write_json_file(const std::string& path, const nlohmann::json& j);

@@ -141,8 +141,9 @@ VectorXd vertex_log_ratio(const VectorXd& face_target, const MatrixXd& UV, const
 }
 
 MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const MatrixXi& F, const VectorXi& side_mask,
-                         double width, int resolution, double smoothing_cells, int rk4_steps, double fraction,
-                         const VectorXi& only_moving) {
+                         double width, const GridFlowOptions& options, double fraction, const VectorXi& only_moving) {
+  const int resolution = options.resolution, rk4_steps = options.rk4_steps;
+  const double smoothing_cells = options.smoothing_cells;
   const int ny = std::max(2, resolution);
   const int nx = std::max(2, static_cast<int>(std::lround(width * resolution)));
   const double hx = width / nx, hy = 1.0 / ny;
@@ -693,249 +694,310 @@ int repair_flips(const MatrixXd& V, const MatrixXi& F, const VectorXi& side_mask
   return moved;
 }
 
-FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& UV0, const VectorXi& side_mask,
-                         const FlowOptions& opt, const ProgressFn& progress) {
-  const int nv = static_cast<int>(V.rows());
-  const double w = opt.width;
-  FlowResult res;
-  FlowReport& rep = res.report;
-  rep.method = opt.method;
-  const VectorXd target = target_face_measure(V, F, opt.density, w);
-  MatrixXd UV = UV0.leftCols(2);
+namespace {
 
-  Stats cur = vertex_stats(vertex_log_ratio(target, UV, F, nv));
-  rep.initial_vertex_mean = cur.mean;
-  rep.initial_vertex_p99 = cur.p99;
-  auto met = [&](const Stats& s) { return s.mean <= opt.tolerance_mean && s.p99 <= opt.tolerance_p99; };
-  const double min_area = flip_area_threshold(w, F.rows());
+// One flow's inputs and evolving state, shared by its steps below.
+struct Flow {
+  const MatrixXd& V;
+  const MatrixXi& F;
+  const VectorXi& side_mask;
+  const FlowOptions& opt;
+  const ProgressFn& progress;
+  int nv;
+  double w;
+  VectorXd target;    // per-face target measure (target_face_measure)
+  double min_area;    // flip threshold (flip_area_threshold)
+  MatrixXd UV;        // the current map
+  Stats cur;          // its per-vertex |ln ratio| statistics
+  FlowReport& rep;
 
-  if (opt.method == FlowMethod::Grid) {
-    rep.stop_reason = "iteration limit";
-    double fraction = 1.0;
-    for (int pass = 0; pass < opt.max_passes; ++pass) {
-      if (met(cur)) {
-        rep.stop_reason = "tolerance";
-        break;
-      }
-      MatrixXd moved = moser_grid_pass(target, UV, F, side_mask, w, opt.grid_resolution, opt.smoothing_cells, opt.rk4_steps,
-                                       fraction);
-      // The flow is a diffeomorphism, its piecewise-linear image of a triangle not quite: a few
-      // triangles can flip where the velocity varies on the scale of a triangle. Take the moved
-      // positions and re-place the vertices around those triangles (repair_flips); holding their
-      // vertices back instead leaves a stuck patch behind that the next passes cannot reach
-      // (measured on benchmark B2, the pial surface: element CV 0.039 instead of 0.004). Only if the repair
-      // fails, fall back to per-vertex flip-preventing steps, so no pass leaves a flipped triangle.
-      MatrixXd next = moved;
-      for (Eigen::Index v = 0; v < next.rows(); ++v) constrain(next(v, 0), next(v, 1), side_mask.size() ? side_mask[v] : 0, w);
-      int unrepaired = 0;
-      const int repaired = repair_flips(V, F, side_mask, w, next, &unrepaired);
-      if (unrepaired > 0) {
-        // Two valid fall-backs: the folded triangles' vertices held back along their paths, or
-        // the moved map untangled by neighbour means (untangle_flips); the one with the lower
-        // per-vertex error is kept. Holding back cascades on native meshes (a held vertex is
-        // overtaken by its neighbours; fs741 pial (benchmark R1), first pass: per-vertex mean 0.27 held back,
-        // 0.033 untangled); untangling smooths a patch (the fsaverage5 whole-brain rectangle:
-        // element CV 0.011 untangled, below 0.01 held back).
-        const MatrixXd held = local_step_positions(UV, F, moved - UV, 0.0, side_mask, w, min_area);
-        MatrixXd untangled = moved;
-        for (Eigen::Index v = 0; v < untangled.rows(); ++v)
-          constrain(untangled(v, 0), untangled(v, 1), side_mask.size() ? side_mask[v] : 0, w);
-        int left = 0;
-        const int moved_by_untangle =
-            untangle_flips(F, side_mask, w, VectorXd::Constant(F.rows(), min_area), untangled, &left);
-        const bool take = left == 0 && vertex_stats(vertex_log_ratio(target, untangled, F, nv)).mean <
-                                           vertex_stats(vertex_log_ratio(target, held, F, nv)).mean;
-        next = take ? std::move(untangled) : held;
-        if (take) rep.repaired += moved_by_untangle;
-      } else {
-        rep.repaired += repaired;
-      }
+  Stats stats_of(const MatrixXd& uv) const { return vertex_stats(vertex_log_ratio(target, uv, F, nv)); }
+  bool met(const Stats& s) const { return s.mean <= opt.tolerance_mean && s.p99 <= opt.tolerance_p99; }
+  MatrixXd constrained(MatrixXd P) const {
+    for (Eigen::Index v = 0; v < P.rows(); ++v) constrain(P(v, 0), P(v, 1), side_mask.size() ? side_mask[v] : 0, w);
+    return P;
+  }
+};
+
+// The moved positions of one grid pass made flip-free. The flow is a diffeomorphism, its
+// piecewise-linear image of a triangle not quite: a few triangles can flip where the velocity
+// varies on the scale of a triangle. Take the moved positions and re-place the vertices around
+// those triangles (repair_flips); holding their vertices back instead leaves a stuck patch behind
+// that the next passes cannot reach (measured on benchmark B2, the pial surface: element CV 0.039
+// instead of 0.004). Only if the repair fails, fall back to per-vertex flip-preventing steps, so
+// no pass leaves a flipped triangle.
+MatrixXd flip_free_positions(Flow& s, const MatrixXd& moved) {
+  MatrixXd next = s.constrained(moved);
+  int unrepaired = 0;
+  const int repaired = repair_flips(s.V, s.F, s.side_mask, s.w, next, &unrepaired);
+  if (unrepaired == 0) {
+    s.rep.repaired += repaired;
+    return next;
+  }
+  // Two valid fall-backs: the folded triangles' vertices held back along their paths, or the
+  // moved map untangled by neighbour means (untangle_flips); the one with the lower per-vertex
+  // error is kept. Holding back cascades on native meshes (a held vertex is overtaken by its
+  // neighbours; fs741 pial (benchmark R1), first pass: per-vertex mean 0.27 held back, 0.033
+  // untangled); untangling smooths a patch (the fsaverage5 whole-brain rectangle: element CV
+  // 0.011 untangled, below 0.01 held back).
+  const MatrixXd held = local_step_positions(s.UV, s.F, moved - s.UV, 0.0, s.side_mask, s.w, s.min_area);
+  MatrixXd untangled = s.constrained(moved);
+  int left = 0;
+  const int moved_by_untangle =
+      untangle_flips(s.F, s.side_mask, s.w, VectorXd::Constant(s.F.rows(), s.min_area), untangled, &left);
+  const bool take = left == 0 && s.stats_of(untangled).mean < s.stats_of(held).mean;
+  if (!take) return held;
+  s.rep.repaired += moved_by_untangle;
+  return untangled;
+}
+
+// Grid method: Moser passes until the tolerance, a slow pass or the pass budget. Each pass is an
+// explicit attempt loop: a pass that does not lower the per-vertex error (or thins triangles
+// below what float32 keeps oriented) is rejected and retried at half its fraction down to
+// kMinPassFraction; rejected attempts are counted apart, not as iterations.
+void grid_passes(Flow& s) {
+  const FlowOptions& opt = s.opt;
+  s.rep.stop_reason = "iteration limit";
+  double fraction = 1.0;
+  for (int pass = 0; pass < opt.grid.max_passes; ++pass) {
+    if (s.met(s.cur)) {
+      s.rep.stop_reason = "tolerance";
+      break;
+    }
+    MatrixXd next;
+    Stats st;
+    bool accepted = false;
+    for (;;) {
+      const MatrixXd moved = moser_grid_pass(s.target, s.UV, s.F, s.side_mask, s.w, opt.grid, fraction);
+      next = flip_free_positions(s, moved);
       // Triangles thinned below what float32 storage keeps oriented are opened; a pass that
       // leaves more of them than it found counts as failed (its gain is not worth a map that
       // reads back folded).
-      const bool thinned =
-          open_thin_triangles(F, side_mask, w, single_precision_area_floor(next, F), next) > count_below_floor(UV, F);
-      const Stats s = vertex_stats(vertex_log_ratio(target, next, F, nv));
-      ++rep.iterations;
-      rep.history_mean.push_back(s.mean);
+      const bool thinned = open_thin_triangles(s.F, s.side_mask, s.w, single_precision_area_floor(next, s.F), next) >
+                           count_below_floor(s.UV, s.F);
+      st = s.stats_of(next);
       std::ostringstream msg;
-      msg << "pass " << pass + 1 << ": per-vertex mean |ln ratio| " << s.mean << ", p99 " << s.p99;
-      report(progress, "flow", double(pass + 1) / opt.max_passes, msg.str());
-      if (!(s.mean < cur.mean) || thinned) {
-        // A full pass could not follow the density (its range too large for the grid): retry
-        // with partial passes before giving up.
-        if (fraction > kMinPassFraction) {
-          fraction *= 0.5;
-          --pass;
-          continue;
-        }
-        rep.stop_reason = "no improvement";
-        break;
-      }
-      const bool slow = s.mean > opt.min_pass_gain * cur.mean;
-      UV = std::move(next);
-      cur = s;
-      fraction = std::min(1.0, 2.0 * fraction);
-      if (slow) {
-        rep.stop_reason = "no improvement";
-        break;
-      }
+      msg << "pass " << pass + 1 << (fraction < 1.0 ? " (partial)" : "") << ": per-vertex mean |ln ratio| " << st.mean
+          << ", p99 " << st.p99;
+      report(s.progress, "flow", double(pass + 1) / opt.grid.max_passes, msg.str());
+      accepted = st.mean < s.cur.mean && !thinned;
+      // A full pass could not follow the density (its range too large for the grid): retry
+      // with partial passes before giving up.
+      if (accepted || !(fraction > kMinPassFraction)) break;
+      ++s.rep.rejected_passes;
+      fraction *= 0.5;
     }
-    if (met(cur)) rep.stop_reason = "tolerance";
-  }
-
-  const VectorXd vertex_target = vertex_share(target, F, nv);
-  auto stats_of = [&](const MatrixXd& uv) { return vertex_stats(vertex_log_ratio(target, uv, F, nv)); };
-
-  if (opt.method == FlowMethod::Mesh) {
-    // DLF Algorithm 1 on a flowing copy of the connectivity (Delaunay flips), or Zou's fixed-K
-    // schedule (eq. 19) when fixed_steps > 0.
-    MatrixXi Fd = F;
-    const int steps = opt.fixed_steps > 0 ? opt.fixed_steps : opt.max_iterations;
-    rep.stop_reason = "iteration limit";
-    for (int k = 0; k < steps; ++k) {
-      if (opt.fixed_steps <= 0 && met(cur)) {
-        rep.stop_reason = "tolerance";
-        break;
-      }
-      if (opt.delaunay_flips) rep.edge_flips += delaunay_flip(UV, Fd);
-      const double fraction = opt.fixed_steps > 0 ? 1.0 / (opt.fixed_steps - k) : 1.0;
-      const MatrixXd D = lie_displacement(UV, Fd, vertex_target, fraction, side_mask);
-      const double lambda = opt.fixed_steps > 0 ? std::min(1.0, adaptive_step(UV, Fd, D, 1.0) < 1.0 ? opt.theta * adaptive_step(UV, Fd, D, 1.0) : 1.0)
-                                                : adaptive_step(UV, Fd, D, opt.theta);
-      if (!(lambda > 1e-12)) {
-        rep.stop_reason = "step vanished";
-        break;
-      }
-      apply_displacement(UV, D, lambda, side_mask, w);
-      cur = stats_of(UV);
-      ++rep.iterations;
-      rep.history_mean.push_back(cur.mean);
-      std::ostringstream msg;
-      msg << "step " << k + 1 << " (lambda " << lambda << "): per-vertex mean |ln ratio| " << cur.mean << ", p99 " << cur.p99;
-      report(progress, "flow", double(k + 1) / steps, msg.str());
+    if (!accepted) {
+      ++s.rep.rejected_passes;
+      s.rep.stop_reason = "no improvement";
+      break;
     }
-    if (met(cur)) rep.stop_reason = "tolerance";
+    ++s.rep.iterations;
+    s.rep.history_mean.push_back(st.mean);
+    const bool slow = st.mean > opt.grid.min_pass_gain * s.cur.mean;
+    s.UV = std::move(next);
+    s.cur = st;
+    fraction = std::min(1.0, 2.0 * fraction);
+    if (slow) {
+      s.rep.stop_reason = "no improvement";
+      break;
+    }
   }
+  if (s.met(s.cur)) s.rep.stop_reason = "tolerance";
+}
 
-  // Flips on the output connectivity (the grid flow is a diffeomorphism only up to its
-  // discretisation; the mesh method flows on flipped connectivity): re-place them.
-  int remaining = 0;
-  const int final_repairs = repair_flips(V, F, side_mask, w, UV, &remaining);
-  rep.repaired += final_repairs;
-  if (final_repairs > 0) cur = stats_of(UV);
+// Mesh method: DLF Algorithm 1 on a flowing copy of the connectivity (Delaunay flips), or Zou's
+// fixed-K schedule (eq. 19) when fixed_steps > 0.
+void mesh_steps(Flow& s) {
+  const FlowOptions& opt = s.opt;
+  const VectorXd vertex_target = vertex_share(s.target, s.F, s.nv);
+  MatrixXi Fd = s.F;
+  const int fixed = opt.mesh.fixed_steps;
+  const int steps = fixed > 0 ? fixed : opt.mesh.max_iterations;
+  s.rep.stop_reason = "iteration limit";
+  for (int k = 0; k < steps; ++k) {
+    if (fixed <= 0 && s.met(s.cur)) {
+      s.rep.stop_reason = "tolerance";
+      break;
+    }
+    if (opt.mesh.delaunay_flips) s.rep.edge_flips += delaunay_flip(s.UV, Fd);
+    const double fraction = fixed > 0 ? 1.0 / (fixed - k) : 1.0;
+    const MatrixXd D = lie_displacement(s.UV, Fd, vertex_target, fraction, s.side_mask);
+    const double lambda = fixed > 0 ? std::min(1.0, adaptive_step(s.UV, Fd, D, 1.0) < 1.0 ? opt.theta * adaptive_step(s.UV, Fd, D, 1.0) : 1.0)
+                                    : adaptive_step(s.UV, Fd, D, opt.theta);
+    if (!(lambda > 1e-12)) {
+      s.rep.stop_reason = "step vanished";
+      break;
+    }
+    apply_displacement(s.UV, D, lambda, s.side_mask, s.w);
+    s.cur = s.stats_of(s.UV);
+    ++s.rep.iterations;
+    s.rep.history_mean.push_back(s.cur.mean);
+    std::ostringstream msg;
+    msg << "step " << k + 1 << " (lambda " << lambda << "): per-vertex mean |ln ratio| " << s.cur.mean << ", p99 " << s.cur.p99;
+    report(s.progress, "flow", double(k + 1) / steps, msg.str());
+  }
+  if (s.met(s.cur)) s.rep.stop_reason = "tolerance";
+}
 
-  // Polish: Gauss-Newton steps on the per-face areas (face_area_newton_displacement) around the
-  // faces whose |ln ratio| exceeds the band, with per-vertex flip-preventing steps and a halving
-  // line search; a step is kept only if it lowers the per-face error without raising the
-  // per-vertex error by more than 5 %. The grid flow leaves sub-cell errors the grid cannot see
-  // (a native pial surface: per-vertex mean 0.028 after the passes, 0.004 after the polish).
-  if (opt.polish && opt.method == FlowMethod::Grid && remaining == 0) {
-    // The vertices of the faces beyond `band` and polish_rings rings around them (through each
+// Polish: Gauss-Newton steps on the per-face areas (face_area_newton_displacement) around the
+// faces whose |ln ratio| exceeds the band, with per-vertex flip-preventing steps and a halving
+// line search; a step is kept only if it lowers the per-face error without raising the
+// per-vertex error by more than kPolishVertexSlack. The grid flow leaves sub-cell errors the grid
+// cannot see (a native pial surface: per-vertex mean 0.028 after the passes, 0.004 after it).
+class Polish {
+ public:
+  explicit Polish(Flow& s) : s_(s), ring_(s.nv), cur_face_(face_log_ratio_mean(s.target, s.UV, s.F)) {
+    // The vertices of the faces beyond a band and polish.rings rings around them (through each
     // face's next corner: a boundary vertex does not reach back along the boundary).
-    std::vector<std::vector<int>> ring(nv);
-    for (Eigen::Index f = 0; f < F.rows(); ++f)
-      for (int c = 0; c < 3; ++c) ring[F(f, c)].push_back(F(f, (c + 1) % 3));
-    auto free_around = [&](double band, std::vector<char>& free_vertex) {
-      const int n = faces_outside_band(target, UV, F, band, free_vertex);
-      grow_by_rings(free_vertex, ring, opt.polish_rings);
-      return n;
-    };
-    double cur_face = face_log_ratio_mean(target, UV, F);
-    // Halving line search on a polish step D: the first scale (1, 1/2, 1/4) whose flip-safe
-    // positions `accept` takes (it sets their per-face error and per-vertex stats) is kept.
-    // No step thins a triangle that is above twice its float32 floor (twice, as the floor moves
-    // with the vertices) below it: opening such slivers afterwards can fail and fall back to
-    // untangling, which costs area (see core/square_map.cpp). One limit per line search.
-    auto line_search = [&](const MatrixXd& D, const std::function<bool(const MatrixXd&, double&, Stats&)>& accept) {
-      VectorXd limit = VectorXd::Constant(F.rows(), min_area);
-      if (opt.polish_float32_floor) {
-        const VectorXd floor = 2.0 * single_precision_area_floor(UV, F), a0 = signed_face_areas_2d(UV, F);
-        for (Eigen::Index f = 0; f < F.rows(); ++f)
-          if (a0[f] > floor[f]) limit[f] = std::max(min_area, floor[f]);
-      }
-      for (double scale = 1.0; scale > 0.1; scale *= 0.5) {
-        MatrixXd next = local_step_positions(UV, F, scale * D, opt.theta, side_mask, w, min_area, &limit);
-        double fm = 0;
-        Stats st;
-        if (!accept(next, fm, st)) continue;
-        UV = std::move(next);
-        cur = st;
-        cur_face = fm;
-        return true;
-      }
-      return false;
-    };
+    for (Eigen::Index f = 0; f < s.F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) ring_[s.F(f, c)].push_back(s.F(f, (c + 1) % 3));
+  }
+
+  // Steps on the whole map until a step gains little.
+  void global_steps() {
+    const PolishOptions& po = s_.opt.polish;
     int slow_in_a_row = 0;
-    for (int k = 0; k < opt.polish_iterations; ++k) {
-      std::vector<char> free_vertex(nv, 0);
-      const int bad = free_around(opt.polish_band, free_vertex);
+    for (int k = 0; k < po.iterations; ++k) {
+      std::vector<char> free_vertex(s_.nv, 0);
+      const int bad = free_around(po.band, free_vertex);
       if (bad == 0) break;
-      const MatrixXd D = face_area_newton_displacement(UV, F, target, side_mask, free_vertex, opt.polish_cg_iterations);
-      const double before = cur_face;
+      const MatrixXd D = face_area_newton_displacement(s_.UV, s_.F, s_.target, s_.side_mask, free_vertex, po.cg_iterations);
+      const double before = cur_face_;
       const bool better = line_search(D, [&](const MatrixXd& next, double& fm, Stats& st) {
-        fm = face_log_ratio_mean(target, next, F);
-        st = stats_of(next);
-        return fm < cur_face && st.mean <= cur.mean * kPolishVertexSlack;
+        fm = face_log_ratio_mean(s_.target, next, s_.F);
+        st = s_.stats_of(next);
+        return fm < cur_face_ && st.mean <= s_.cur.mean * kPolishVertexSlack;
       });
       if (!better) break;
-      const bool slow = cur_face > 0.99 * before;
-      ++rep.polish_iterations;
+      const bool slow = cur_face_ > 0.99 * before;
+      ++s_.rep.polish_iterations;
       std::ostringstream msg;
-      msg << "polish " << k + 1 << " (" << bad << " faces outside the band): per-face mean |ln ratio| " << cur_face
-          << ", per-vertex mean " << cur.mean << ", p99 " << cur.p99;
-      report(progress, "flow", -1, msg.str());
+      msg << "polish " << k + 1 << " (" << bad << " faces outside the band): per-face mean |ln ratio| " << cur_face_
+          << ", per-vertex mean " << s_.cur.mean << ", p99 " << s_.cur.p99;
+      report(s_.progress, "flow", -1, msg.str());
       // A slow step ends it once the per-vertex mean meets its tolerance; before that, two in a
       // row: on coarse folded meshes one slow step is often a plateau before the Gauss-Newton
       // steps speed up again (a 12 x 12 folded grid: 1 %, then up to 20 % a step).
       slow_in_a_row = slow ? slow_in_a_row + 1 : 0;
-      if (slow && (cur.mean <= opt.tolerance_mean || slow_in_a_row == kPolishSlowStepsToStop)) break;
+      if (slow && (s_.cur.mean <= s_.opt.tolerance_mean || slow_in_a_row == kPolishSlowStepsToStop)) break;
     }
-    // The global steps stop when the whole map gains little, which leaves the few spots whose
-    // faces are far from their areas, often where the flow cannot reach (a corner, where the
-    // Neumann field vanishes: fs741 pial 96 % mask, a corner element at 0.71 of its share).
-    // Those get steps of their own: faces beyond polish_far_band and polish_rings rings around
-    // them, judged on their own error, kept only if the whole map's errors do not rise.
-    for (int k = 0; k < opt.polish_iterations; ++k) {
-      std::vector<char> free_vertex(nv, 0);
-      const int far = free_around(opt.polish_far_band, free_vertex);
+  }
+
+  // The global steps stop when the whole map gains little, which leaves the few spots whose
+  // faces are far from their areas, often where the flow cannot reach (a corner, where the
+  // Neumann field vanishes: fs741 pial 96 % mask, a corner element at 0.71 of its share). Those
+  // get steps of their own: faces beyond far_band and `rings` rings around them, judged on their
+  // own error, kept only if the whole map's errors do not rise.
+  void far_face_steps() {
+    const PolishOptions& po = s_.opt.polish;
+    for (int k = 0; k < po.iterations; ++k) {
+      std::vector<char> free_vertex(s_.nv, 0);
+      const int far = free_around(po.far_band, free_vertex);
       if (far == 0) break;
       std::vector<int> local_faces;
-      for (Eigen::Index f = 0; f < F.rows(); ++f)
-        if (free_vertex[F(f, 0)] || free_vertex[F(f, 1)] || free_vertex[F(f, 2)]) local_faces.push_back(static_cast<int>(f));
+      for (Eigen::Index f = 0; f < s_.F.rows(); ++f)
+        if (free_vertex[s_.F(f, 0)] || free_vertex[s_.F(f, 1)] || free_vertex[s_.F(f, 2)]) local_faces.push_back(static_cast<int>(f));
       MatrixXi Fl(local_faces.size(), 3);
       VectorXd tl(local_faces.size());
       for (std::size_t i = 0; i < local_faces.size(); ++i) {
-        Fl.row(static_cast<Eigen::Index>(i)) = F.row(local_faces[i]);
-        tl[static_cast<Eigen::Index>(i)] = target[local_faces[i]];
+        Fl.row(static_cast<Eigen::Index>(i)) = s_.F.row(local_faces[i]);
+        tl[static_cast<Eigen::Index>(i)] = s_.target[local_faces[i]];
       }
-      const double local_before = face_log_ratio_mean(tl, UV, Fl);
-      const MatrixXd D = face_area_newton_displacement(UV, F, target, side_mask, free_vertex, opt.polish_cg_iterations);
+      const double local_before = face_log_ratio_mean(tl, s_.UV, Fl);
+      const MatrixXd D = face_area_newton_displacement(s_.UV, s_.F, s_.target, s_.side_mask, free_vertex, po.cg_iterations);
       double local_after = local_before;
       const bool better = line_search(D, [&](const MatrixXd& next, double& fm, Stats& st) {
         local_after = face_log_ratio_mean(tl, next, Fl);
         if (!(local_after < local_before)) return false;
-        fm = face_log_ratio_mean(target, next, F);
-        st = stats_of(next);
-        return fm <= cur_face && st.mean <= cur.mean * 1.01;
+        fm = face_log_ratio_mean(s_.target, next, s_.F);
+        st = s_.stats_of(next);
+        return fm <= cur_face_ && st.mean <= s_.cur.mean * 1.01;
       });
       if (!better) break;
-      ++rep.polish_iterations;
+      ++s_.rep.polish_iterations;
       std::ostringstream msg;
-      msg << "polish of the far faces " << k + 1 << " (" << far << " faces beyond " << opt.polish_far_band
+      msg << "polish of the far faces " << k + 1 << " (" << far << " faces beyond " << po.far_band
           << "): their error " << local_before << " -> " << local_after;
-      report(progress, "flow", -1, msg.str());
+      report(s_.progress, "flow", -1, msg.str());
       if (local_after > 0.99 * local_before) break;
     }
-    if (met(cur)) rep.stop_reason = "tolerance";
   }
 
-  rep.flips = count_flipped(UV, F, min_area);
-  rep.converged = met(cur);
-  rep.final_vertex_mean = cur.mean;
-  rep.final_vertex_p99 = cur.p99;
-  rep.final_vertex_max = cur.max;
-  res.UV = std::move(UV);
+ private:
+  int free_around(double band, std::vector<char>& free_vertex) const {
+    const int n = faces_outside_band(s_.target, s_.UV, s_.F, band, free_vertex);
+    grow_by_rings(free_vertex, ring_, s_.opt.polish.rings);
+    return n;
+  }
+
+  // Halving line search on a polish step D: the first scale (1, 1/2, 1/4) whose flip-safe
+  // positions `accept` takes (it sets their per-face error and per-vertex stats) is kept.
+  // No step thins a triangle that is above twice its float32 floor (twice, as the floor moves
+  // with the vertices) below it: opening such slivers afterwards can fail and fall back to
+  // untangling, which costs area (see core/square_map.cpp). One limit per line search.
+  bool line_search(const MatrixXd& D, const std::function<bool(const MatrixXd&, double&, Stats&)>& accept) {
+    VectorXd limit = VectorXd::Constant(s_.F.rows(), s_.min_area);
+    if (s_.opt.polish.float32_floor) {
+      const VectorXd floor = 2.0 * single_precision_area_floor(s_.UV, s_.F), a0 = signed_face_areas_2d(s_.UV, s_.F);
+      for (Eigen::Index f = 0; f < s_.F.rows(); ++f)
+        if (a0[f] > floor[f]) limit[f] = std::max(s_.min_area, floor[f]);
+    }
+    for (double scale = 1.0; scale > 0.1; scale *= 0.5) {
+      MatrixXd next = local_step_positions(s_.UV, s_.F, scale * D, s_.opt.theta, s_.side_mask, s_.w, s_.min_area, &limit);
+      double fm = 0;
+      Stats st;
+      if (!accept(next, fm, st)) continue;
+      s_.UV = std::move(next);
+      s_.cur = st;
+      cur_face_ = fm;
+      return true;
+    }
+    return false;
+  }
+
+  Flow& s_;
+  std::vector<std::vector<int>> ring_;
+  double cur_face_;
+};
+
+}  // namespace
+
+FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& UV0, const VectorXi& side_mask,
+                         const FlowOptions& opt, const ProgressFn& progress) {
+  FlowResult res;
+  FlowReport& rep = res.report;
+  rep.method = opt.method;
+  const double w = opt.width;
+  Flow s{V, F, side_mask, opt, progress, static_cast<int>(V.rows()), w, target_face_measure(V, F, opt.density, w),
+         flip_area_threshold(w, F.rows()), UV0.leftCols(2), Stats{}, rep};
+  s.cur = s.stats_of(s.UV);
+  rep.initial_vertex_mean = s.cur.mean;
+  rep.initial_vertex_p99 = s.cur.p99;
+
+  if (opt.method == FlowMethod::Grid) grid_passes(s);
+  if (opt.method == FlowMethod::Mesh) mesh_steps(s);
+
+  // Flips on the output connectivity (the grid flow is a diffeomorphism only up to its
+  // discretisation; the mesh method flows on flipped connectivity): re-place them.
+  int remaining = 0;
+  const int final_repairs = repair_flips(V, F, side_mask, w, s.UV, &remaining);
+  rep.repaired += final_repairs;
+  if (final_repairs > 0) s.cur = s.stats_of(s.UV);
+
+  if (opt.polish.enabled && opt.method == FlowMethod::Grid && remaining == 0) {
+    Polish polish(s);
+    polish.global_steps();
+    polish.far_face_steps();
+    if (s.met(s.cur)) rep.stop_reason = "tolerance";
+  }
+
+  rep.flips = count_flipped(s.UV, F, s.min_area);
+  rep.converged = s.met(s.cur);
+  rep.final_vertex_mean = s.cur.mean;
+  rep.final_vertex_p99 = s.cur.p99;
+  rep.final_vertex_max = s.cur.max;
+  res.UV = std::move(s.UV);
   return res;
 }
 

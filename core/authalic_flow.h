@@ -26,7 +26,7 @@
 //  - Polish (after Grid, on by default): Gauss-Newton steps on the per-face areas of the output
 //    connectivity (face_area_newton_displacement), kept only while they lower the per-face error
 //    without flipping; for the sub-cell errors a grid cannot see (native meshes). Then local
-//    steps about the faces still beyond polish_far_band, judged on their own error (a few faces
+//    steps about the faces still beyond polish.far_band, judged on their own error (a few faces
 //    far off, e.g. at a corner where the Neumann field vanishes, never move the global error).
 // Measure control (DLF section 5.5): an optional per-vertex density multiplies the surface area
 // element, so a region of density 2 receives twice its natural share of the domain.
@@ -41,6 +41,38 @@ namespace authalic {
 enum class FlowMethod { Grid, Mesh };
 std::string to_string(FlowMethod m);
 
+// The Grid method's knobs (one Moser pass: rasterise, smooth, solve, advect).
+struct GridFlowOptions {
+  int resolution = 512;          // cells along the unit side (nx = round(W * resolution), ny = resolution)
+  int rk4_steps = 20;            // RK4 steps over t in [0, 1] per pass (20 and 80 agree to 1e-3 on benchmark B1, docs/references.md)
+  double smoothing_cells = 1.0;  // Gaussian standard deviation of the density smoothing, in cells
+  // Passes beyond 3 are stopped by min_pass_gain on every mesh measured (benchmarks B1-B3, fs741
+  // white and pial): `flatten`, `run` and `rectangle` take this default (they had 3 and 6).
+  int max_passes = 3;
+  double min_pass_gain = 0.95;   // stop after a pass that keeps more than this share of the error
+};
+
+// The Mesh method's knobs (DLF Algorithm 1 or Zou's fixed-K schedule).
+struct MeshFlowOptions {
+  int max_iterations = 200;      // mesh steps
+  int fixed_steps = 0;           // > 0: Zou's fixed-K schedule (eq. 19) with K = fixed_steps steps
+  bool delaunay_flips = true;    // Delaunay edge flips of the flowing domain mesh
+};
+
+// The polish after the Grid method: Gauss-Newton steps on the per-face areas.
+struct PolishOptions {
+  bool enabled = true;           // finish with mesh steps on the output connectivity
+  int iterations = 16;           // at most; it stops at a step removing < 1 % of the per-face error (two in a row while not converged)
+  double band = 0.05;            // corrects faces whose |ln area ratio| exceeds this band
+  double far_band = 0.5;         // then (up to `iterations`) local steps about the faces still beyond this
+  int cg_iterations = 50;        // conjugate-gradient iterations per step (inexact Newton)
+  int rings = 3;                 // vertices within this many rings of an out-of-band vertex move
+  // Steps keep every triangle above twice its float32 floor (single_precision_area_floor): for
+  // maps stored as float32. Off for intermediate maps (the sphere's square route: there the limit
+  // cost element CV, fs741 pial 0.0049 -> 0.0054).
+  bool float32_floor = true;
+};
+
 struct FlowOptions {
   FlowMethod method = FlowMethod::Grid;
   double width = 1.0;  // the domain is [0, W] x [0, 1]
@@ -51,36 +83,17 @@ struct FlowOptions {
   // percentile <= tolerance_p99; or no further improvement; or the iteration budget is spent.
   double tolerance_mean = 0.006;
   double tolerance_p99 = 0.01;
+  double theta = 0.5;  // fraction of the critical flip-preventing step (DLF eq. 5): mesh steps and polish
 
-  // Grid method.
-  int grid_resolution = 512;     // cells along the unit side (nx = round(W * resolution), ny = resolution)
-  int rk4_steps = 20;            // RK4 steps over t in [0, 1] per pass (20 and 80 agree to 1e-3 on benchmark B1, docs/references.md)
-  // Passes beyond 3 are stopped by min_pass_gain on every mesh measured (benchmarks B1-B3, fs741
-  // white and pial): `flatten`, `run` and `rectangle` take this default (they had 3 and 6).
-  int max_passes = 3;
-  double min_pass_gain = 0.95;   // stop after a pass that keeps more than this share of the error
-  double smoothing_cells = 1.0;  // Gaussian standard deviation of the density smoothing, in cells
-  bool polish = true;            // finish with mesh steps on the output connectivity
-
-  // Mesh method (and polish).
-  int max_iterations = 200;      // mesh steps (Mesh method); polish uses polish_iterations
-  int polish_iterations = 16;    // at most; it stops at a step removing < 1 % of the per-face error (two in a row while not converged)
-  double polish_band = 0.05;     // polish corrects faces whose |ln area ratio| exceeds this band
-  double polish_far_band = 0.5;  // then (up to polish_iterations) local steps about the faces still beyond this
-  int polish_cg_iterations = 50; // conjugate-gradient iterations per polish step (inexact Newton)
-  int polish_rings = 3;          // vertices within this many rings of an out-of-band vertex move
-  // Polish steps keep every triangle above twice its float32 floor (single_precision_area_floor):
-  // for maps stored as float32. Off for intermediate maps (the sphere's square route: there the
-  // limit cost element CV, fs741 pial 0.0049 -> 0.0054).
-  bool polish_float32_floor = true;
-  double theta = 0.5;            // fraction of the critical flip-preventing step (DLF eq. 5)
-  int fixed_steps = 0;           // > 0: Zou's fixed-K schedule (eq. 19) with K = fixed_steps steps
-  bool delaunay_flips = true;    // Delaunay edge flips of the flowing domain mesh (Mesh method)
+  GridFlowOptions grid;
+  MeshFlowOptions mesh;
+  PolishOptions polish;
 };
 
 struct FlowReport {
   FlowMethod method = FlowMethod::Grid;
-  int iterations = 0;            // passes (Grid) or steps (Mesh)
+  int iterations = 0;            // accepted passes (Grid) or steps (Mesh)
+  int rejected_passes = 0;       // Grid: attempts rejected and retried at half their fraction
   int polish_iterations = 0;
   bool converged = false;        // met the tolerance
   std::string stop_reason;       // "tolerance", "no improvement", "iteration limit", "step vanished"
@@ -115,12 +128,13 @@ VectorXd target_face_measure(const MatrixXd& V, const MatrixXi& F, const VectorX
 // NaN for unused vertices.
 VectorXd vertex_log_ratio(const VectorXd& face_target, const MatrixXd& UV, const MatrixXi& F, int num_vertices);
 
-// One Moser pass on the grid: rasterise, smooth, solve, advect (RK4). Returns the moved UV.
-// fraction < 1: a partial pass that removes only that fraction of ln(density). only_moving
-// non-empty (#V, 0/1): only those vertices are advected, the others keep UV (the field is still
-// that of the whole map; used to slide the boundary alone, core/stretch_energy.h).
+// One Moser pass on the grid of [0, width] x [0, 1]: rasterise, smooth, solve, advect (RK4) with
+// `grid`'s resolution, smoothing and RK4 steps. Returns the moved UV. fraction < 1: a partial pass
+// that removes only that fraction of ln(density). only_moving non-empty (#V, 0/1): only those
+// vertices are advected, the others keep UV (the field is still that of the whole map; used to
+// slide the boundary alone, core/stretch_energy.h).
 MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const MatrixXi& F, const VectorXi& side_mask,
-                         double width, int resolution, double smoothing_cells, int rk4_steps, double fraction = 1.0,
+                         double width, const GridFlowOptions& grid, double fraction = 1.0,
                          const VectorXi& only_moving = VectorXi());
 
 // Gauss-Newton (Levenberg-Marquardt) step on the per-face areas: minimise Σ_f (a_f − T_f)² / T_f

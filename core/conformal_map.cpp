@@ -257,42 +257,43 @@ MatrixXd sliding_harmonic_map(const MatrixXd& V, const MatrixXi& F, const Vector
   return out;
 }
 
-ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F, const RectangleBoundaryMap& opt,
-                                           SpdSolver* solver) {
-  SpdSolver local;
-  SpdSolver& spd = solver ? *solver : local;  // the cotangent and clamped systems share one analysis
+namespace {
+
+// The boundary loop of a disk (cheap check: one boundary loop, edge-manifold, Euler
+// characteristic 1; the full topology report only to explain a refusal).
+std::vector<int> disk_boundary_loop(const MatrixXd& V, const MatrixXi& F) {
   const int nv = static_cast<int>(V.rows());
-  const double w = opt.width;
-  if (!(w > 0)) throw std::invalid_argument("conformal_rectangle_map: the rectangle width must be positive");
-  if (V.cols() < 3) throw std::invalid_argument("conformal_rectangle_map: V must have 3 columns");
-  // Cheap disk check (one boundary loop, Euler characteristic 1); the full report only to explain a refusal.
   const auto loops = boundary_loops(F, nv);
-  {
-    const EdgeTopology et = edge_topology(F, nv);
-    std::vector<char> used(nv, 0);
-    for (Eigen::Index f = 0; f < F.rows(); ++f)
-      for (int c = 0; c < 3; ++c) used[F(f, c)] = 1;
-    int nused = 0;
-    for (char u : used) nused += u;
-    bool manifold = true;
-    for (const auto& ef : et.edge_faces) manifold = manifold && ef.size() <= 2;
-    if (loops.size() != 1 || !manifold || nused - et.E.rows() + F.rows() != 1) {
-      const TopologyReport topo = analyze_topology(V, F);
-      if (!topo.is_disk())
-        throw std::invalid_argument("conformal_rectangle_map: the mesh is not a disk (" + topo.summary() + ")");
-    }
+  const EdgeTopology et = edge_topology(F, nv);
+  std::vector<char> used(nv, 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) used[F(f, c)] = 1;
+  int nused = 0;
+  for (char u : used) nused += u;
+  bool manifold = true;
+  for (const auto& ef : et.edge_faces) manifold = manifold && ef.size() <= 2;
+  if (loops.size() != 1 || !manifold || nused - et.E.rows() + F.rows() != 1) {
+    const TopologyReport topo = analyze_topology(V, F);
+    if (!topo.is_disk()) throw std::invalid_argument("conformal_rectangle_map: the mesh is not a disk (" + topo.summary() + ")");
   }
-  std::vector<int> loop = loops.front();
+  if (loops.front().size() < 3) throw std::invalid_argument("conformal_rectangle_map: boundary loop shorter than 3 vertices");
+  return loops.front();
+}
+
+// Step 1: the loop rotated to start at the anchor, and its arc-length perimeter coordinates,
+// unwrapped: s[0] = the anchor's position, s[i + 1] = s[i] + P l_i / L, s[nb] = s[0] + P.
+struct BoundaryCoordinates {
+  std::vector<int> loop;
+  std::vector<double> s;
+};
+BoundaryCoordinates rectangle_boundary_coordinates(const MatrixXd& V, std::vector<int> loop, const RectangleBoundaryMap& opt) {
   const int nb = static_cast<int>(loop.size());
-  if (nb < 3) throw std::invalid_argument("conformal_rectangle_map: boundary loop shorter than 3 vertices");
   if (opt.anchor_vertex >= 0) {
     auto it = std::find(loop.begin(), loop.end(), opt.anchor_vertex);
     if (it == loop.end()) throw std::invalid_argument("conformal_rectangle_map: the anchor vertex is not on the boundary");
     std::rotate(loop.begin(), it, loop.end());
   }
-
-  // Arc-length perimeter coordinates, unwrapped: s[0] = anchor position, increasing by P * l / L.
-  const double P = rectangle_perimeter(w);
+  const double P = rectangle_perimeter(opt.width);
   std::vector<double> s(nb + 1);
   double total = 0;
   for (int i = 0; i < nb; ++i) total += (row3(V, loop[(i + 1) % nb]) - row3(V, loop[i])).norm();
@@ -317,12 +318,38 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
   }
   for (int i = 0; i < nb; ++i) s[i + 1] = s[i] + P * (row3(V, loop[(i + 1) % nb]) - row3(V, loop[i])).norm() / total;
   s[nb] = s[0] + P;  // exact closure
+  return {std::move(loop), std::move(s)};
+}
 
+// The mesh after the corner splits (step 2): positions, side bits and the boundary's perimeter
+// coordinates of every vertex so far, faces with the input face each comes from, the inserted
+// vertices' parents, and the boundary loop with the inserted corner vertices.
+struct SplitMesh {
+  std::vector<Eigen::Vector3d> pos;
+  std::vector<int> mask;
+  std::vector<double> vertex_s;              // input vertices: perimeter coordinate (boundary only)
+  std::vector<Eigen::Vector2d> extra_uv;     // inserted corner vertices: their corner
+  std::vector<std::array<int, 2>> parents;   // inserted vertex = (1 − w) parent0 + w parent1
+  std::vector<double> parent_weight;
+  std::vector<int> loop;
+  MatrixXi F;
+  std::vector<int> origin;
+};
+
+// Step 2: each corner of the rectangle goes to a boundary vertex moved onto it (when the nearer
+// endpoint of its edge is within corner_snap of the edge's length) or to a vertex inserted on
+// its boundary edge, which splits the edge's face.
+SplitMesh split_corner_edges(const MatrixXd& V, const MatrixXi& F, const BoundaryCoordinates& bc, const RectangleBoundaryMap& opt,
+                             ConformalMapResult& R) {
+  const int nv = static_cast<int>(V.rows());
+  const double w = opt.width, P = rectangle_perimeter(w);
+  const std::vector<int>& loop = bc.loop;
+  const std::vector<double>& s = bc.s;
+  const int nb = static_cast<int>(loop.size());
   // Corners in unwrapped coordinates within [s0, s0 + P): find each one's boundary edge.
   const auto corners = corner_coordinates(w);
   std::vector<int> corner_of(nb, -1);                       // boundary position -> corner id (snapped)
   std::vector<std::vector<std::pair<double, int>>> inserted(nb);  // per edge i: (unwrapped s, corner id)
-  ConformalMapResult R;
   for (int c = 0; c < 4; ++c) {
     double cu = corners[c];
     cu += P * std::ceil((s[0] - cu) / P);  // smallest c + kP >= s0
@@ -344,24 +371,21 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
   }
   for (auto& v : inserted) std::sort(v.begin(), v.end());
 
-  // Output vertices: the input's, then inserted corner vertices, then ear-split midpoints.
+  // Output vertices: the input's, then inserted corner vertices (then, step 3, ear-split midpoints).
+  SplitMesh m;
   std::vector<Eigen::Vector3d> extra;
-  std::vector<std::array<int, 2>> parents;  // inserted vertex = (1 − w) parent0 + w parent1
-  std::vector<double> parent_weight;
-  std::vector<Eigen::Vector2d> extra_uv;
   std::vector<int> extra_side;
-  std::vector<double> vertex_s(nv, 0.0);
+  m.vertex_s.assign(nv, 0.0);
   std::vector<int> side(nv, 0);
-  MatrixXd boundary_uv_in(nb, 2);
   for (int i = 0; i < nb; ++i) {
     const int v = loop[i];
     if (corner_of[i] >= 0) {
       side[v] = kCornerSides[corner_of[i]];
-      vertex_s[v] = corners[corner_of[i]];
+      m.vertex_s[v] = corners[corner_of[i]];
       ++R.corners_snapped;
     } else {
       side[v] = rectangle_side(s[i], w);
-      vertex_s[v] = s[i];
+      m.vertex_s[v] = s[i];
     }
   }
 
@@ -376,13 +400,12 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
         if (it != halfedge_face.end()) it->second = static_cast<int>(f);
       }
 
-  // Stage 1 faces (corner splits): each input face's pieces, in input order.
+  // Each input face's pieces, in input order.
   std::vector<std::vector<Face>> pieces(F.rows());
   for (Eigen::Index f = 0; f < F.rows(); ++f) pieces[f].push_back({F(f, 0), F(f, 1), F(f, 2)});
-  std::vector<int> final_loop;
   for (int i = 0; i < nb; ++i) {
     const int a = loop[i], b = loop[(i + 1) % nb];
-    final_loop.push_back(a);
+    m.loop.push_back(a);
     if (inserted[i].empty()) continue;
     const int f = halfedge_face.at({a, b});
     const Face orig = pieces[f].front();
@@ -393,13 +416,13 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
     for (const auto& [cu, c] : inserted[i]) {
       const double t = (cu - s[i]) / (s[i + 1] - s[i]);
       extra.push_back((1 - t) * row3(V, a) + t * row3(V, b));
-      parents.push_back({a, b});
-      parent_weight.push_back(t);
-      extra_uv.push_back(rectangle_perimeter_point(corners[c], w));
+      m.parents.push_back({a, b});
+      m.parent_weight.push_back(t);
+      m.extra_uv.push_back(rectangle_perimeter_point(corners[c], w));
       extra_side.push_back(kCornerSides[c]);
       const int id = nv + static_cast<int>(extra.size()) - 1;
       chain.push_back(id);
-      final_loop.push_back(id);
+      m.loop.push_back(id);
       ++R.corner_vertices_inserted;
     }
     chain.push_back(b);
@@ -407,131 +430,114 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
     for (size_t k = 0; k + 1 < chain.size(); ++k) pieces[f].push_back({chain[k], chain[k + 1], x});
   }
 
-  // Side masks over all vertices so far.
+  // Side masks and positions over all vertices so far.
   const int n1 = nv + static_cast<int>(extra.size());
-  std::vector<int> mask(n1, 0);
-  for (int v = 0; v < nv; ++v) mask[v] = side[v];
-  for (size_t k = 0; k < extra.size(); ++k) mask[nv + k] = extra_side[k];
+  m.mask.assign(n1, 0);
+  for (int v = 0; v < nv; ++v) m.mask[v] = side[v];
+  for (size_t k = 0; k < extra.size(); ++k) m.mask[nv + k] = extra_side[k];
+  size_t count = 0;
+  for (const auto& p : pieces) count += p.size();
+  m.F.resize(static_cast<Eigen::Index>(count), 3);
+  Eigen::Index r = 0;
+  for (size_t f = 0; f < pieces.size(); ++f)
+    for (const Face& t : pieces[f]) {
+      m.F.row(r++) << t[0], t[1], t[2];
+      m.origin.push_back(static_cast<int>(f));
+    }
+  m.pos.resize(n1);
+  for (int v = 0; v < nv; ++v) m.pos[v] = row3(V, v);
+  for (size_t k = 0; k < extra.size(); ++k) m.pos[nv + k] = extra[k];
+  return m;
+}
 
-  MatrixXi F1;
-  std::vector<int> origin1;
-  {
-    size_t count = 0;
-    for (const auto& p : pieces) count += p.size();
-    F1.resize(static_cast<Eigen::Index>(count), 3);
-    Eigen::Index r = 0;
-    for (size_t f = 0; f < pieces.size(); ++f)
-      for (const Face& t : pieces[f]) {
-        F1.row(r++) << t[0], t[1], t[2];
-        origin1.push_back(static_cast<int>(f));
-      }
-  }
-
-  std::vector<Eigen::Vector3d> all_pos(n1);
-  for (int v = 0; v < nv; ++v) all_pos[v] = row3(V, v);
-  for (size_t k = 0; k < extra.size(); ++k) all_pos[nv + k] = extra[k];
-  EdgeTopology topo1 = edge_topology(F1, n1);
-  if (opt.flip_dividing_edges) R.edges_flipped = flip_dividing_edges(all_pos, mask, F1, origin1, topo1);
-
-  // Stage 2 (ear splits): interior edges whose endpoints share a side.
+// Step 3: dividing edges (interior edges whose endpoints share a side) flipped where the quad
+// allows it (flip_dividing_edges), the rest split at their 3D midpoint; triangles with 1, 2 or 3
+// split edges become 2, 3 or 4. Returns the faces (and each one's input face); appends the
+// midpoints to m.pos and m.parents.
+MatrixXi split_ear_edges(SplitMesh& m, const RectangleBoundaryMap& opt, ConformalMapResult& R, std::vector<int>* out_origin) {
+  const int n1 = static_cast<int>(m.pos.size());
+  std::vector<Eigen::Vector3d>& all_pos = m.pos;
+  const std::vector<int>& mask = m.mask;
+  EdgeTopology topo1 = edge_topology(m.F, n1);
+  if (opt.flip_dividing_edges) R.edges_flipped = flip_dividing_edges(all_pos, m.mask, m.F, m.origin, topo1);
+  const MatrixXi& F1 = m.F;
   std::vector<int> mid(topo1.E.rows(), -1);
   for (Eigen::Index e = 0; e < topo1.E.rows(); ++e) {
     const int a = topo1.E(e, 0), b = topo1.E(e, 1);
     if (topo1.edge_faces[e].size() == 2 && (mask[a] & mask[b]) != 0) {
       mid[e] = static_cast<int>(all_pos.size());
       all_pos.push_back(0.5 * (all_pos[a] + all_pos[b]));
-      parents.push_back({a, b});
-      parent_weight.push_back(0.5);
+      m.parents.push_back({a, b});
+      m.parent_weight.push_back(0.5);
       ++R.edges_split;
     }
   }
   std::vector<Face> out_faces;
-  std::vector<int> out_origin;
   out_faces.reserve(F1.rows() + 3 * R.edges_split);
   for (Eigen::Index f = 0; f < F1.rows(); ++f) {
     const int v[3] = {F1(f, 0), F1(f, 1), F1(f, 2)};
-    const int m[3] = {mid[topo1.FE(f, 0)], mid[topo1.FE(f, 1)], mid[topo1.FE(f, 2)]};  // m[c] on the edge opposite corner c
-    const int nsplit = (m[0] >= 0) + (m[1] >= 0) + (m[2] >= 0);
+    const int mc[3] = {mid[topo1.FE(f, 0)], mid[topo1.FE(f, 1)], mid[topo1.FE(f, 2)]};  // mc[c] on the edge opposite corner c
+    const int nsplit = (mc[0] >= 0) + (mc[1] >= 0) + (mc[2] >= 0);
     auto emit = [&](int a, int b, int c) {
       out_faces.push_back({a, b, c});
-      out_origin.push_back(origin1[f]);
+      out_origin->push_back(m.origin[f]);
     };
     if (nsplit == 0) {
       emit(v[0], v[1], v[2]);
     } else if (nsplit == 1) {
       int c = 0;
-      while (m[c] < 0) ++c;
-      emit(v[c], v[(c + 1) % 3], m[c]);
-      emit(v[c], m[c], v[(c + 2) % 3]);
+      while (mc[c] < 0) ++c;
+      emit(v[c], v[(c + 1) % 3], mc[c]);
+      emit(v[c], mc[c], v[(c + 2) % 3]);
     } else if (nsplit == 2) {
       int c = 0;  // the corner opposite the unsplit edge
-      while (m[c] >= 0) ++c;
+      while (mc[c] >= 0) ++c;
       const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-      // m[c2] lies on edge (v_c, v_c1), m[c1] on edge (v_c2, v_c).
-      emit(v[c], m[c2], m[c1]);
-      // Quad (m[c2], v_c1, v_c2, m[c1]): cut along its shorter diagonal.
-      const double d1 = (all_pos[m[c2]] - all_pos[v[c2]]).norm(), d2 = (all_pos[v[c1]] - all_pos[m[c1]]).norm();
+      // mc[c2] lies on edge (v_c, v_c1), mc[c1] on edge (v_c2, v_c).
+      emit(v[c], mc[c2], mc[c1]);
+      // Quad (mc[c2], v_c1, v_c2, mc[c1]): cut along its shorter diagonal.
+      const double d1 = (all_pos[mc[c2]] - all_pos[v[c2]]).norm(), d2 = (all_pos[v[c1]] - all_pos[mc[c1]]).norm();
       if (d1 <= d2) {
-        emit(m[c2], v[c1], v[c2]);
-        emit(m[c2], v[c2], m[c1]);
+        emit(mc[c2], v[c1], v[c2]);
+        emit(mc[c2], v[c2], mc[c1]);
       } else {
-        emit(v[c1], v[c2], m[c1]);
-        emit(v[c1], m[c1], m[c2]);
+        emit(v[c1], v[c2], mc[c1]);
+        emit(v[c1], mc[c1], mc[c2]);
       }
     } else {
-      emit(v[0], m[2], m[1]);
-      emit(v[1], m[0], m[2]);
-      emit(v[2], m[1], m[0]);
-      emit(m[0], m[1], m[2]);
+      emit(v[0], mc[2], mc[1]);
+      emit(v[1], mc[0], mc[2]);
+      emit(v[2], mc[1], mc[0]);
+      emit(mc[0], mc[1], mc[2]);
     }
   }
+  MatrixXi out(static_cast<Eigen::Index>(out_faces.size()), 3);
+  for (size_t f = 0; f < out_faces.size(); ++f) out.row(f) << out_faces[f][0], out_faces[f][1], out_faces[f][2];
+  return out;
+}
 
-  // Assemble the result.
-  const int ntot = static_cast<int>(all_pos.size());
-  R.num_input_vertices = nv;
-  R.width = w;
-  R.V.resize(ntot, 3);
-  for (int v = 0; v < ntot; ++v) R.V.row(v) = all_pos[v].transpose();
-  R.F.resize(static_cast<Eigen::Index>(out_faces.size()), 3);
-  R.face_origin.resize(static_cast<Eigen::Index>(out_faces.size()));
-  for (size_t f = 0; f < out_faces.size(); ++f) {
-    R.F.row(f) << out_faces[f][0], out_faces[f][1], out_faces[f][2];
-    R.face_origin[f] = out_origin[f];
-  }
-  R.inserted_parents.resize(static_cast<Eigen::Index>(parents.size()), 2);
-  R.inserted_weight.resize(static_cast<Eigen::Index>(parents.size()));
-  for (size_t k = 0; k < parents.size(); ++k) {
-    R.inserted_parents.row(k) << parents[k][0], parents[k][1];
-    R.inserted_weight[k] = parent_weight[k];
-  }
-  R.side_mask = VectorXi::Zero(ntot);
-  for (int v = 0; v < n1; ++v) R.side_mask[v] = mask[v];
-  R.boundary = final_loop;
-
-  // Dirichlet data: the boundary's perimeter points.
-  MatrixXd buv(final_loop.size(), 2);
-  for (size_t k = 0; k < final_loop.size(); ++k) {
-    const int v = final_loop[k];
-    buv.row(k) = v < nv ? rectangle_perimeter_point(vertex_s[v], w).transpose() : extra_uv[v - nv].transpose();
-  }
-
+// Step 4: the harmonic map with the Dirichlet boundary `buv` on R's mesh: cotangent weights
+// (then, with sliding_boundary, the sliding LSCM), falling back to opt.fallback and then uniform
+// weights while triangles fold (Tutte/Floater: positive weights on a convex boundary embed).
+void harmonic_map_with_fallback(ConformalMapResult& R, const MatrixXd& buv, const RectangleBoundaryMap& opt, SpdSolver& spd) {
+  const std::vector<int>& loop = R.boundary;
+  const double w = opt.width;
   // Flipped or degenerate: signed area below a tiny fraction of the mean triangle area.
   const double min_area = flip_area_threshold(w, R.F.rows());
-  // The fallback weights, and uniform ones if those fold too.
   auto solve_with_fallback = [&] {
     R.weights = opt.fallback;
-    R.UV = harmonic_map(R.V, R.F, final_loop, buv, opt.fallback, spd);
+    R.UV = harmonic_map(R.V, R.F, loop, buv, opt.fallback, spd);
     if (count_flipped(R.UV, R.F, min_area) > 0) {
       R.weights = HarmonicWeights::Uniform;
-      R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::Uniform);
+      R.UV = harmonic_map(R.V, R.F, loop, buv, HarmonicWeights::Uniform);
     }
   };
   if (!opt.try_cotangent) {
     solve_with_fallback();
-    return R;
+    return;
   }
   R.weights = HarmonicWeights::Cotangent;
-  R.UV = harmonic_map(R.V, R.F, final_loop, buv, HarmonicWeights::Cotangent, spd);
+  R.UV = harmonic_map(R.V, R.F, loop, buv, HarmonicWeights::Cotangent, spd);
   if (opt.sliding_boundary) {
     // Least-squares conformal map with the boundary vertices free to slide along their sides
     // (corners and the anchor fixed): the area term of LSCM is constant on this constraint set,
@@ -540,17 +546,60 @@ ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F,
     for (HarmonicWeights hw : {HarmonicWeights::Cotangent, HarmonicWeights::MeanValue}) {
       MatrixXd slid = sliding_harmonic_map(R.V, R.F, R.side_mask, w, R.UV, pinned, hw);
       bool inside = true;
-      for (int v : final_loop) inside = inside && slid(v, 0) >= 0 && slid(v, 0) <= w && slid(v, 1) >= 0 && slid(v, 1) <= 1;
+      for (int v : loop) inside = inside && slid(v, 0) >= 0 && slid(v, 0) <= w && slid(v, 1) >= 0 && slid(v, 1) <= 1;
       if (inside && count_flipped(slid, R.F, min_area) == 0) {
         R.UV = std::move(slid);
         R.sliding = true;
         R.weights = hw;
-        return R;
+        return;
       }
     }
   }
   R.cotangent_flips = count_flipped(R.UV, R.F, min_area);
   if (R.cotangent_flips > 0) solve_with_fallback();
+}
+
+}  // namespace
+
+ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F, const RectangleBoundaryMap& opt,
+                                           SpdSolver* solver) {
+  SpdSolver local;
+  SpdSolver& spd = solver ? *solver : local;  // the cotangent and clamped systems share one analysis
+  const int nv = static_cast<int>(V.rows());
+  const double w = opt.width;
+  if (!(w > 0)) throw std::invalid_argument("conformal_rectangle_map: the rectangle width must be positive");
+  if (V.cols() < 3) throw std::invalid_argument("conformal_rectangle_map: V must have 3 columns");
+  ConformalMapResult R;
+  const BoundaryCoordinates bc = rectangle_boundary_coordinates(V, disk_boundary_loop(V, F), opt);
+  SplitMesh m = split_corner_edges(V, F, bc, opt, R);
+  const int n1 = static_cast<int>(m.pos.size());
+  std::vector<int> origin;
+  R.F = split_ear_edges(m, opt, R, &origin);
+
+  // Assemble the result.
+  const int ntot = static_cast<int>(m.pos.size());
+  R.num_input_vertices = nv;
+  R.width = w;
+  R.V.resize(ntot, 3);
+  for (int v = 0; v < ntot; ++v) R.V.row(v) = m.pos[v].transpose();
+  R.face_origin = Eigen::Map<const VectorXi>(origin.data(), static_cast<Eigen::Index>(origin.size()));
+  R.inserted_parents.resize(static_cast<Eigen::Index>(m.parents.size()), 2);
+  R.inserted_weight.resize(static_cast<Eigen::Index>(m.parents.size()));
+  for (size_t k = 0; k < m.parents.size(); ++k) {
+    R.inserted_parents.row(k) << m.parents[k][0], m.parents[k][1];
+    R.inserted_weight[k] = m.parent_weight[k];
+  }
+  R.side_mask = VectorXi::Zero(ntot);
+  for (int v = 0; v < n1; ++v) R.side_mask[v] = m.mask[v];
+  R.boundary = m.loop;
+
+  // Dirichlet data: the boundary's perimeter points.
+  MatrixXd buv(m.loop.size(), 2);
+  for (size_t k = 0; k < m.loop.size(); ++k) {
+    const int v = m.loop[k];
+    buv.row(k) = v < nv ? rectangle_perimeter_point(m.vertex_s[v], w).transpose() : m.extra_uv[v - nv].transpose();
+  }
+  harmonic_map_with_fallback(R, buv, opt, spd);
   return R;
 }
 

@@ -247,7 +247,9 @@ RectanglePart map_disk(const MatrixXd& V, const MatrixXd& G, const MatrixXi& F, 
     const VectorXd target = target_face_measure(V3, cm.F, fo.density, width);
     for (int pass = 0; pass < pre_passes; ++pass) {
       report(progress, "transport", double(pass) / pre_passes, "Moser pass " + std::to_string(pass + 1));
-      UV = moser_grid_pass(target, UV, cm.F, cm.side_mask, width, fo.grid_resolution, fo.smoothing_cells, std::max(fo.rk4_steps, kTransportRk4Steps));
+      GridFlowOptions transport = fo.grid;
+      transport.rk4_steps = std::max(transport.rk4_steps, kTransportRk4Steps);
+      UV = moser_grid_pass(target, UV, cm.F, cm.side_mask, width, transport);
     }
   }
   FlowResult fr = authalic_flow(V3, cm.F, UV, cm.side_mask, fo, progress);

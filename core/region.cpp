@@ -171,6 +171,83 @@ std::string mm2(double a) {
 
 std::string plural(int n, const char* one, const char* many) { return std::to_string(n) + " " + (n == 1 ? one : many); }
 
+
+
+// Step 4 of region_faces_from_vertices: at each pinch vertex of the mask only its largest fan of
+// faces stays (the smaller fans are removed, and their vertices checked again), then the largest
+// piece left. Returns the faces removed (mask is updated).
+std::vector<char> remove_smaller_fans(const Surface& s, const MatrixXi& F, std::vector<char>& mask) {
+  std::vector<char> removed(static_cast<std::size_t>(s.nf), 0);
+  const std::vector<char> pinch = pinch_vertices(s, mask);
+  std::set<int> todo;
+  for (int v = 0; v < s.nv; ++v)
+    if (pinch[v]) todo.insert(v);
+  std::vector<int> faces;
+  std::vector<std::pair<int, int>> by_neighbour;  // (w, local face index)
+  while (!todo.empty()) {
+    const int v = *todo.begin();
+    todo.erase(todo.begin());
+    faces.clear();
+    for (int k = s.vf_start[v]; k < s.vf_start[v + 1]; ++k)
+      if (mask[s.vf[k]]) faces.push_back(s.vf[k]);
+    if (faces.size() < 2) continue;
+    const int m = static_cast<int>(faces.size());
+    by_neighbour.clear();
+    for (int i = 0; i < m; ++i)
+      for (int c = 0; c < 3; ++c)
+        if (F(faces[i], c) != v) by_neighbour.emplace_back(F(faces[i], c), i);
+    std::sort(by_neighbour.begin(), by_neighbour.end());
+    UnionFind fans(m);
+    for (std::size_t i = 0; i < by_neighbour.size();) {
+      std::size_t j = i;
+      while (j < by_neighbour.size() && by_neighbour[j].first == by_neighbour[i].first) ++j;
+      if (j - i == 2) fans.unite(by_neighbour[i].second, by_neighbour[i + 1].second);
+      i = j;
+    }
+    std::vector<double> area(static_cast<std::size_t>(m), 0.0);
+    for (int i = 0; i < m; ++i) area[fans.find(i)] += s.A[faces[i]];
+    int best = -1;  // roots are the lowest local index, i.e. the fan's lowest face
+    for (int i = 0; i < m; ++i)
+      if (fans.find(i) == i && (best < 0 || area[i] > area[best])) best = i;
+    bool any = false;
+    for (int i = 0; i < m; ++i)
+      if (fans.find(i) != best) {
+        any = true;
+        mask[faces[i]] = 0;
+        removed[faces[i]] = 1;
+        for (int c = 0; c < 3; ++c) todo.insert(F(faces[i], c));
+      }
+    if (any) todo.insert(v);
+  }
+  const std::vector<char> before = mask;
+  std::vector<int> comp;
+  keep_largest(s, mask, comp, nullptr);
+  for (int f = 0; f < s.nf; ++f)
+    if (before[f] && !mask[f]) removed[f] = 1;
+  return removed;
+}
+
+// The enclosed holes left in the final mask (too large to fill): their number, and the largest
+// one's area, share and vertices (those not used by the region).
+void measure_unfilled_holes(const Surface& s, const std::vector<char>& mask, const std::vector<char>& used, RegionCleanup& r) {
+  const Complement c = complement(s, mask);
+  int largest = -1;
+  for (std::size_t g = 0; g < c.groups.size(); ++g)
+    if (c.is_hole(static_cast<int>(g))) {
+      ++r.holes_unfilled;
+      if (largest < 0 || c.groups[g].area > c.groups[largest].area) largest = static_cast<int>(g);
+    }
+  if (largest >= 0) {
+    r.largest_unfilled_hole_mm2 = c.groups[largest].area;
+    r.largest_unfilled_hole_fraction = r.area_mm2 > 0 ? c.groups[largest].area / r.area_mm2 : 0;
+    std::vector<char> hole(static_cast<std::size_t>(s.nf), 0);
+    for (int f = 0; f < s.nf; ++f) hole[f] = c.comp[f] == largest;
+    const std::vector<char> hole_used = used_vertices(s, hole);
+    for (int v = 0; v < s.nv; ++v)
+      if (hole_used[v] && !used[v]) ++r.largest_unfilled_hole_vertices;
+  }
+}
+
 }  // namespace
 
 RegionCleanup region_faces_from_vertices(const MatrixXd& V, const MatrixXi& F, const std::vector<bool>& in_region,
@@ -250,54 +327,8 @@ RegionCleanup region_faces_from_vertices(const MatrixXd& V, const MatrixXi& F, c
     }
 
   // 4. Pinch vertices left: remove the smaller fans, then any piece cut loose.
-  std::vector<char> removed(static_cast<std::size_t>(s.nf), 0);
+  const std::vector<char> removed = remove_smaller_fans(s, F, mask);
   {
-    const std::vector<char> pinch = pinch_vertices(s, mask);
-    std::set<int> todo;
-    for (int v = 0; v < s.nv; ++v)
-      if (pinch[v]) todo.insert(v);
-    std::vector<int> faces;
-    std::vector<std::pair<int, int>> by_neighbour;  // (w, local face index)
-    while (!todo.empty()) {
-      const int v = *todo.begin();
-      todo.erase(todo.begin());
-      faces.clear();
-      for (int k = s.vf_start[v]; k < s.vf_start[v + 1]; ++k)
-        if (mask[s.vf[k]]) faces.push_back(s.vf[k]);
-      if (faces.size() < 2) continue;
-      const int m = static_cast<int>(faces.size());
-      by_neighbour.clear();
-      for (int i = 0; i < m; ++i)
-        for (int c = 0; c < 3; ++c)
-          if (F(faces[i], c) != v) by_neighbour.emplace_back(F(faces[i], c), i);
-      std::sort(by_neighbour.begin(), by_neighbour.end());
-      UnionFind fans(m);
-      for (std::size_t i = 0; i < by_neighbour.size();) {
-        std::size_t j = i;
-        while (j < by_neighbour.size() && by_neighbour[j].first == by_neighbour[i].first) ++j;
-        if (j - i == 2) fans.unite(by_neighbour[i].second, by_neighbour[i + 1].second);
-        i = j;
-      }
-      std::vector<double> area(static_cast<std::size_t>(m), 0.0);
-      for (int i = 0; i < m; ++i) area[fans.find(i)] += s.A[faces[i]];
-      int best = -1;  // roots are the lowest local index, i.e. the fan's lowest face
-      for (int i = 0; i < m; ++i)
-        if (fans.find(i) == i && (best < 0 || area[i] > area[best])) best = i;
-      bool any = false;
-      for (int i = 0; i < m; ++i)
-        if (fans.find(i) != best) {
-          any = true;
-          mask[faces[i]] = 0;
-          removed[faces[i]] = 1;
-          for (int c = 0; c < 3; ++c) todo.insert(F(faces[i], c));
-        }
-      if (any) todo.insert(v);
-    }
-    std::vector<char> before = mask;
-    std::vector<int> comp;
-    keep_largest(s, mask, comp, nullptr);
-    for (int f = 0; f < s.nf; ++f)
-      if (before[f] && !mask[f]) removed[f] = 1;
     for (int f = 0; f < s.nf; ++f)
       if (removed[f]) {
         ++r.pinch_faces_removed;
@@ -334,24 +365,7 @@ RegionCleanup region_faces_from_vertices(const MatrixXd& V, const MatrixXi& F, c
     for (int v = 0; v < s.nv; ++v)
       if (raw_pinch[v] && !pinch[v]) ++r.pinch_vertices_fixed;
   }
-  if (count > 0) {
-    const Complement c = complement(s, mask);
-    int largest = -1;
-    for (std::size_t g = 0; g < c.groups.size(); ++g)
-      if (c.is_hole(static_cast<int>(g))) {
-        ++r.holes_unfilled;
-        if (largest < 0 || c.groups[g].area > c.groups[largest].area) largest = static_cast<int>(g);
-      }
-    if (largest >= 0) {
-      r.largest_unfilled_hole_mm2 = c.groups[largest].area;
-      r.largest_unfilled_hole_fraction = r.area_mm2 > 0 ? c.groups[largest].area / r.area_mm2 : 0;
-      std::vector<char> hole(static_cast<std::size_t>(s.nf), 0);
-      for (int f = 0; f < s.nf; ++f) hole[f] = c.comp[f] == largest;
-      const std::vector<char> hole_used = used_vertices(s, hole);
-      for (int v = 0; v < s.nv; ++v)
-        if (hole_used[v] && !used[v]) ++r.largest_unfilled_hole_vertices;
-    }
-  }
+  if (count > 0) measure_unfilled_holes(s, mask, used, r);
   return r;
 }
 

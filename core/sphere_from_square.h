@@ -46,7 +46,7 @@ inline SphereFlowOptions coarse_sphere_flow_options() {
 // CV sits near its bar, so it keeps them).
 inline SquareMapOptions sphere_square_options() {
   SquareMapOptions o;
-  o.flow.max_passes = 6;
+  o.flow.grid.max_passes = 6;
   return o;
 }
 

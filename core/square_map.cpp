@@ -95,8 +95,8 @@ int keep_orientation_in_single_precision(const MatrixXd& V, const MatrixXi& F, c
   // The polish again on the untangled map; kept only if it leaves (after opening) no triangle
   // below the floor and a lower per-vertex error, else the untangled map stands.
   FlowOptions polish_only = fo;
-  polish_only.max_passes = 0;
-  polish_only.polish_cg_iterations *= 4;  // the smoothed spots are badly conditioned: inexact steps stall there
+  polish_only.grid.max_passes = 0;
+  polish_only.polish.cg_iterations *= 4;  // the smoothed spots are badly conditioned: inexact steps stall there
   FlowResult again = authalic_flow(V, F, UV, side_mask, polish_only, progress);
   floor = single_precision_area_floor(again.UV, F);
   if (open_thin_triangles(F, side_mask, fo.width, floor, again.UV) > 0) return 0;

@@ -29,6 +29,72 @@ double mean_log_stretch(const VectorXd& map_area, const VectorXd& target) {
 
 }  // namespace
 
+namespace {
+
+// The Laplacian of the unknowns (L) and its coupling to the held boundary (B): the interior solve
+// is L X = B UV_boundary, so a moved boundary costs a solve, not a factorisation. Their pattern
+// is the same every iteration: laid out once, with the slot of every contribution (face f, corner
+// c: the edge (i, j) opposite c, a diagonal +w and an off-diagonal −w per end that is an unknown;
+// a held neighbour goes to B), so an iteration only refills the values.
+struct InteriorSystem {
+  const MatrixXi& F;
+  const std::vector<int>& idx;  // vertex -> unknown, -1 for held or unused vertices
+  SparseMatrix L, B;
+  std::vector<int> l_slot, b_slot;
+
+  template <class Add>
+  void for_each_contribution(Add&& add) const {
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int i = F(f, (c + 1) % 3), j = F(f, (c + 2) % 3);
+        for (const auto& [p, q] : {std::pair<int, int>{i, j}, std::pair<int, int>{j, i}}) {
+          if (idx[p] < 0) continue;
+          add(f, c, idx[p], idx[p], false, true);
+          if (idx[q] >= 0)
+            add(f, c, idx[p], idx[q], false, false);
+          else
+            add(f, c, idx[p], q, true, false);
+        }
+      }
+  }
+
+  InteriorSystem(const MatrixXi& faces, const std::vector<int>& unknown, int m, Eigen::Index nv)
+      : F(faces), idx(unknown), L(m, m), B(m, nv) {
+    std::vector<Eigen::Triplet<double>> t, tb;
+    t.reserve(static_cast<std::size_t>(12 * F.rows()));
+    for_each_contribution([&](Eigen::Index, int, int r, int col, bool to_boundary, bool) {
+      (to_boundary ? tb : t).emplace_back(r, col, 1.0);
+    });
+    L.setFromTriplets(t.begin(), t.end());
+    B.setFromTriplets(tb.begin(), tb.end());
+    auto slot_of = [](const SparseMatrix& M, int r, int col) {
+      const int* begin = M.innerIndexPtr() + M.outerIndexPtr()[col];
+      const int* end = M.innerIndexPtr() + M.outerIndexPtr()[col + 1];
+      return static_cast<int>(std::lower_bound(begin, end, r) - M.innerIndexPtr());
+    };
+    l_slot.reserve(t.size());
+    b_slot.reserve(tb.size());
+    for (const auto& x : t) l_slot.push_back(slot_of(L, x.row(), x.col()));
+    for (const auto& x : tb) b_slot.push_back(slot_of(B, x.row(), x.col()));
+  }
+
+  // New weights W(f, c) * scale[f] into the fixed pattern (contributions in their layout order).
+  void refill(const MatrixXd& W, const VectorXd& scale) {
+    std::fill(L.valuePtr(), L.valuePtr() + L.nonZeros(), 0.0);
+    std::fill(B.valuePtr(), B.valuePtr() + B.nonZeros(), 0.0);
+    std::size_t n_l = 0, n_b = 0;
+    for_each_contribution([&](Eigen::Index f, int c, int, int, bool to_boundary, bool diagonal) {
+      const double w = W(f, c) * scale[f];
+      if (to_boundary)
+        B.valuePtr()[b_slot[n_b++]] += w;
+      else
+        L.valuePtr()[l_slot[n_l++]] += diagonal ? w : -w;
+    });
+  }
+};
+
+}  // namespace
+
 MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd& face_target, const MatrixXd& UV0,
                             const VectorXi& side_mask, double width, const StretchEnergyOptions& opt,
                             StretchEnergyReport* report, SpdSolver* reuse) {
@@ -55,45 +121,9 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
   const double st = face_target.sum();
   double err = mean_log_stretch(area, face_target);
   if (report) report->initial_log_stretch = report->final_log_stretch = err;
-  // The Laplacian of the unknowns (L) and its coupling to the held boundary (B): the interior
-  // solve is L X = B UV_boundary, so a moved boundary costs a solve, not a factorisation. Their
-  // pattern is the same every iteration: laid out once, with the slot of every contribution
-  // (face f, corner c: the edge (i, j) opposite c, a diagonal +w and an off-diagonal −w per end
-  // that is an unknown; a held neighbour goes to B), so an iteration only refills the values.
-  auto for_each_contribution = [&](auto&& add) {
-    for (Eigen::Index f = 0; f < nf; ++f)
-      for (int c = 0; c < 3; ++c) {
-        const int i = F(f, (c + 1) % 3), j = F(f, (c + 2) % 3);
-        for (const auto& [p, q] : {std::pair<int, int>{i, j}, std::pair<int, int>{j, i}}) {
-          if (idx[p] < 0) continue;
-          add(f, c, idx[p], idx[p], false, true);
-          if (idx[q] >= 0)
-            add(f, c, idx[p], idx[q], false, false);
-          else
-            add(f, c, idx[p], q, true, false);
-        }
-      }
-  };
-  SparseMatrix L(m, m), B(m, nv);
-  std::vector<int> l_slot, b_slot;
-  {
-    std::vector<Eigen::Triplet<double>> t, tb;
-    t.reserve(static_cast<std::size_t>(12 * nf));
-    for_each_contribution([&](Eigen::Index, int, int r, int col, bool to_boundary, bool) {
-      (to_boundary ? tb : t).emplace_back(r, col, 1.0);
-    });
-    L.setFromTriplets(t.begin(), t.end());
-    B.setFromTriplets(tb.begin(), tb.end());
-    auto slot_of = [](const SparseMatrix& M, int r, int col) {
-      const int* begin = M.innerIndexPtr() + M.outerIndexPtr()[col];
-      const int* end = M.innerIndexPtr() + M.outerIndexPtr()[col + 1];
-      return static_cast<int>(std::lower_bound(begin, end, r) - M.innerIndexPtr());
-    };
-    l_slot.reserve(t.size());
-    b_slot.reserve(tb.size());
-    for (const auto& x : t) l_slot.push_back(slot_of(L, x.row(), x.col()));
-    for (const auto& x : tb) b_slot.push_back(slot_of(B, x.row(), x.col()));
-  }
+  InteriorSystem sys(F, idx, m, nv);
+  SparseMatrix& L = sys.L;
+  SparseMatrix& B = sys.B;
   VectorXd scale = VectorXd::Ones(nf);  // w_k / w_0 = Π σ_j per face
   SpdSolver local;  // the pattern is the same every iteration: one analysis (or the caller's)
   SpdSolver& solver = reuse ? *reuse : local;
@@ -102,24 +132,19 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
     VectorXd trial(nf);
     for (Eigen::Index f = 0; f < nf; ++f)
       trial[f] = scale[f] * std::pow(std::max(1e-300, (area[f] / sa) / (face_target[f] / st)), opt.exponent);
-    // New weights into the fixed pattern (contributions in the order they were laid out).
-    std::fill(L.valuePtr(), L.valuePtr() + L.nonZeros(), 0.0);
-    std::fill(B.valuePtr(), B.valuePtr() + B.nonZeros(), 0.0);
-    std::size_t n_l = 0, n_b = 0;
-    for_each_contribution([&](Eigen::Index f, int c, int, int, bool to_boundary, bool diagonal) {
-      const double w = W(f, c) * trial[f];
-      if (to_boundary)
-        B.valuePtr()[b_slot[n_b++]] += w;
-      else
-        L.valuePtr()[l_slot[n_l++]] += diagonal ? w : -w;
-    });
+    sys.refill(W, trial);
     if (!solver.refactor(L)) break;
 
     // Boundary: slid along its sides by one Moser pass of the current map (Neumann velocity, so
     // corners stay), and only as far as the interior re-solve stays an embedding (halving).
     MatrixXd slid = UV;
-    if (opt.moser_boundary)
-      slid = moser_grid_pass(face_target, UV, F, side_mask, width, opt.boundary_grid, 1.0, 20, 1.0, on_boundary);
+    if (opt.moser_boundary) {
+      GridFlowOptions slide;
+      slide.resolution = opt.boundary_grid;
+      slide.smoothing_cells = 1.0;
+      slide.rk4_steps = 20;
+      slid = moser_grid_pass(face_target, UV, F, side_mask, width, slide, 1.0, on_boundary);
+    }
     bool accepted = false;
     double e = err;
     MatrixXd next;

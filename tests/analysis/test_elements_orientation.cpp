@@ -28,7 +28,7 @@ TEST(ElementMapOrientation, MirroredHemisphereTracesItsInsertedVertices) {
   TriMesh right = left;
   right.V.col(0) *= -1.0;
   SquareMapOptions o;
-  o.flow.grid_resolution = 128;
+  o.flow.grid.resolution = 128;
   o.flip_dividing_edges = false;  // splits, so there are inserted vertices to trace
   const SquareMapResult l = square_map(left.V, left.F, o), r = square_map(right.V, right.F, o);
   ASSERT_NE(l.faces_reversed, r.faces_reversed);

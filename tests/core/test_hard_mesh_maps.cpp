@@ -139,7 +139,7 @@ TriMesh lifted_sliver_patch() {
 SquareMapOptions fast_square_options() {
   SquareMapOptions o;
   o.anatomical_anchor = false;
-  o.flow.grid_resolution = 256;
+  o.flow.grid.resolution = 256;
   return o;
 }
 
@@ -203,7 +203,7 @@ TEST(HardMeshMaps, SquareMapWithTheMeshFlowOnHardMeshesIsCorrectOrRefused) {
                                    {"comb_patch", comb_patch()}}) {
     SquareMapOptions o = fast_square_options();
     o.flow.method = FlowMethod::Mesh;
-    o.flow.max_iterations = 100;
+    o.flow.mesh.max_iterations = 100;
     try {
       const SquareMapResult r = square_map(mesh.V, mesh.F, o);
       expect_correct_square_map(r, name);
@@ -262,8 +262,8 @@ TEST(HardMeshMaps, FlowThatCannotReachItsToleranceStopsAndSaysSo) {
   const TriMesh m = protrusion_patch();
   {
     SquareMapOptions o = fast_square_options();
-    o.flow.max_passes = 1;
-    o.flow.polish = false;
+    o.flow.grid.max_passes = 1;
+    o.flow.polish.enabled = false;
     o.flow.tolerance_mean = 1e-9;
     o.flow.tolerance_p99 = 1e-9;
     const SquareMapResult r = square_map(m.V, m.F, o);
@@ -279,7 +279,7 @@ TEST(HardMeshMaps, FlowThatCannotReachItsToleranceStopsAndSaysSo) {
   {
     SquareMapOptions o = fast_square_options();
     o.flow.method = FlowMethod::Mesh;
-    o.flow.max_iterations = 3;
+    o.flow.mesh.max_iterations = 3;
     o.flow.tolerance_mean = 1e-9;
     o.flow.tolerance_p99 = 1e-9;
     const SquareMapResult r = square_map(m.V, m.F, o);

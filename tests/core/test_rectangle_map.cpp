@@ -180,7 +180,7 @@ TEST(RectangleMap, DeterministicForOneAndTwoThreads) {
   // A coarser flow grid keeps the test short; form (a)'s 384 x 192 grid is not a power of two, so
   // the DCT takes its cosine-matrix path, whose products are large enough for Eigen to run them
   // on several threads (the cause of a 3e-14 difference before they were split by columns).
-  o.flow.grid_resolution = 192;
+  o.flow.grid.resolution = 192;
   const TriMesh left = test::folded_patch(12);
   TriMesh right = left;
   right.V *= 1.1;

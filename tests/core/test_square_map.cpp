@@ -48,7 +48,7 @@ TriMesh curved_cap() {
 
 SquareMapOptions test_options() {
   SquareMapOptions o;
-  o.flow.grid_resolution = 256;
+  o.flow.grid.resolution = 256;
   return o;
 }
 
@@ -186,14 +186,14 @@ TEST(DiscreteLieFlow, AdaptiveMeshFlowReducesDistortionWithoutFlips) {
   const TriMesh m = test::uneven_disk(12, 24);
   SquareMapOptions o = test_options();
   o.flow.method = FlowMethod::Mesh;
-  o.flow.max_iterations = 60;
+  o.flow.mesh.max_iterations = 60;
   o.stretch_start = false;  // the mesh flow's own work, from the conformal map
   const SquareMapResult r = square_map(m.V, m.F, o);
   EXPECT_EQ(r.flips, 0);
   EXPECT_GT(r.flow.iterations, 0);
   EXPECT_LT(r.flow.final_vertex_mean, 0.5 * r.flow.initial_vertex_mean);
   // Zou's fixed schedule (eq. 19) takes exactly its K steps.
-  o.flow.fixed_steps = 5;
+  o.flow.mesh.fixed_steps = 5;
   const SquareMapResult k = square_map(m.V, m.F, o);
   EXPECT_EQ(k.flow.iterations, 5);
   EXPECT_EQ(k.flips, 0);

@@ -53,8 +53,8 @@ double log_stretch_after(const TriMesh& m, bool slide) {
   o.orient_outward = false;
   o.stretch.moser_boundary = slide;
   o.stretch.max_iterations = 20;
-  o.flow.max_passes = 0;
-  o.flow.polish = false;
+  o.flow.grid.max_passes = 0;
+  o.flow.polish.enabled = false;
   return square_map(m.V, m.F, o).stretch.final_log_stretch;
 }
 
@@ -73,8 +73,8 @@ TEST(StretchEnergy, SlidBoundaryStaysOnItsSidesInOrder) {
   SquareMapOptions o;
   o.anatomical_anchor = false;
   o.orient_outward = false;
-  o.flow.max_passes = 0;
-  o.flow.polish = false;
+  o.flow.grid.max_passes = 0;
+  o.flow.polish.enabled = false;
   const SquareMapResult r = square_map(m.V, m.F, o);
   EXPECT_EQ(count_flipped(r.UV, r.F), 0);
   for (Eigen::Index v = 0; v < r.UV.rows(); ++v) {
