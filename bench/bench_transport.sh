@@ -54,7 +54,7 @@ for mesh in ['B1', 'R1']:
         steps = t['omt']['iterations'] if 'omt' in t else '-'
         print(f"| {mesh} {'default' if refine == 'none' else '+ OMT'} | {wall:.2f} | {cpu:.2f} | {rss} | {m['flips']} | "
               f"{m['element_cv']:.5f} | {e['element_area_cv']:.5f} | {m['face_ln_area_abs']['mean']:.4f} | "
-              f"{m['vertex_ln_area_abs']['mean']:.4f} | {m['lambda']['mean']:.4f} | {e['lambda_mean']:.4f} | "
+              f"{m['vertex_ln_area_abs']['mean']:.4f} | {m['lambda']['mean']:.4f} | {e['qc_lambda_mean']:.4f} | "
               f"{t['cost_from_initial_map']:.6f} | {steps} |")
 print()
 ok = lambda c: 'PASS' if c else 'FAIL'
