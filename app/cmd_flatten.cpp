@@ -40,6 +40,9 @@ struct FlattenArgs {
   bool split_dividing_edges = false;
   bool keep_failed = false;
   std::string start = "stretch";
+  std::string refine = "none";
+  int omt_grid = 0;
+  int omt_iterations = OptimalTransportOptions{}.max_iterations;
   double max_memory = -1;  // GB; < 0: 75% of the physical RAM
   long long max_vertices = 300000;
 };
@@ -132,6 +135,22 @@ void write_flat(const std::string& path, const MatrixXd& XY, const MatrixXi& F, 
   io::write_surface(path, TriMesh{P, F}, wo);
 }
 
+// ∫ |x − T(x)|² dμ / ∫ dμ from the conformal initial map (unit-square units²), and with --refine omt
+// what the refinement did (core/optimal_transport.h).
+nlohmann::json transport_json(const SquareMapResult& r, const SquareMapOptions& o) {
+  nlohmann::json t = {{"refine", o.optimal_transport ? "omt" : "none"},
+                      {"cost_from_initial_map", r.transport_cost},
+                      {"units", "mean squared displacement from the conformal initial map, in unit-square units^2"}};
+  if (o.optimal_transport)
+    t["omt"] = {{"iterations", r.transport.iterations},
+                {"grid_resolution", r.transport.grid_resolution},
+                {"stop_reason", r.transport.stop_reason},
+                {"cost_before", r.transport.initial_cost},
+                {"cost_after_refinement", r.transport.final_cost},
+                {"cost_history", r.transport.history}};
+  return t;
+}
+
 void run(const FlattenArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const int given = !a.faces_from.empty() + !a.label.empty() + !a.patch.empty();
@@ -169,6 +188,9 @@ void run(const FlattenArgs& a) {
   options.flow.polish.enabled = !a.no_polish;
   options.flip_dividing_edges = !a.split_dividing_edges;
   options.stretch_start = a.start == "stretch";
+  options.optimal_transport = a.refine == "omt";
+  options.transport.grid_resolution = a.omt_grid;
+  options.transport.max_iterations = a.omt_iterations;
   if (!a.density.empty()) options.density = io::read_per_vertex(a.density, mesh.num_vertices());
 
   SquareMapResult r;
@@ -266,6 +288,7 @@ void run(const FlattenArgs& a) {
                       {"metrics", metrics_json(final_metrics)},
                       {"seconds", {{"map", seconds_map}, {"initial_map", clock.seconds("initial")}, {"flow", clock.seconds("stretch") + clock.seconds("flow")}, {"total", seconds}}}};
   if (cleanup) j["region_cleanup"] = region_cleanup_json(*cleanup);
+  j["transport"] = transport_json(r, options);
   j["acceptance"] = acceptance_json(problem, "32x32");
   j["initial_map"]["stretch_energy"] = {{"iterations", r.stretch.iterations},
                                         {"face_ln_stretch_abs_mean_before", r.stretch.initial_log_stretch},
@@ -344,6 +367,20 @@ void setup(CLI::App& parent) {
   sub->add_option("--start", a->start,
                   "Start of the flow: stretch (conformal map, then stretch-energy iterations, Yueh et al. 2019) or conformal")
       ->check(CLI::IsMember({"stretch", "conformal"}))
+      ->capture_default_str();
+  sub->add_option("--refine", a->refine,
+                  "After the authalic map: none, or omt (the optimal-transport refinement, Dominitz & Tannenbaum 2010: "
+                  "among area-preserving maps the one that moves area the least from the conformal initial map; areas are "
+                  "restored by the flow afterwards; docs/maps.md)")
+      ->check(CLI::IsMember({"none", "omt"}))
+      ->capture_default_str();
+  sub->add_option("--omt-grid", a->omt_grid,
+                  "Cells per side of the grid the refinement's projection is solved on (0: about one cell per 4 vertices, "
+                  "32 to 256)")
+      ->check(in_range(0, 4096))
+      ->capture_default_str();
+  sub->add_option("--omt-iterations", a->omt_iterations, "Maximum steps of the refinement")
+      ->check(in_range(0, 100000))
       ->capture_default_str();
   sub->add_option("--uv", a->uv, "Also write the map in unit-square coordinates [0,1]^2 (GIFTI)");
   sub->add_option("--initial", a->initial, "Also write the conformal initial map in [0,1]^2 (GIFTI)");

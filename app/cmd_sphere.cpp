@@ -37,6 +37,7 @@ struct SphereArgs {
   int grid = 0;
   int passes = 4;
   std::string route = "auto";
+  std::string refine = "none";
   bool keep_failed = false;
   double max_memory = -1;  // GB; < 0: 75% of the physical RAM
 };
@@ -57,6 +58,9 @@ void run(const SphereArgs& a) {
   options.flow_options.max_passes = a.passes;
   options.flow = a.passes > 0;
   options.route = a.route == "square" ? SphereRoute::Square : a.route == "flow" ? SphereRoute::Flow : SphereRoute::Auto;
+  options.square_route.square.optimal_transport = a.refine == "omt";
+  if (options.square_route.square.optimal_transport && options.route == SphereRoute::Flow)
+    throw InputError("--refine omt: the refinement works on the square route's square map; drop --route flow");
   if (!a.conformal.empty() && options.route != SphereRoute::Flow)
     throw InputError("--conformal: only the flow route has a conformal sphere; add --route flow to write one");
   SphereMapResult r;
@@ -118,6 +122,16 @@ void run(const SphereArgs& a) {
                       {"metrics", metrics_json(final_metrics)},
                       {"seconds", {{"conformal", clock.seconds("conformal")}, {"flow", seconds_map - clock.seconds("conformal")}, {"total", seconds}}}};
   j["acceptance"] = acceptance_json(problem, "64x32");
+  j["refine"] = a.refine;
+  if (options.square_route.square.optimal_transport && r.route == SphereRoute::Square) {
+    const OptimalTransportReport& t = r.square_route.square_transport;
+    j["square_route_transport"] = {{"iterations", t.iterations},
+                                   {"stop_reason", t.stop_reason},
+                                   {"cost_before", t.initial_cost},
+                                   {"cost_after_refinement", t.final_cost},
+                                   {"units", "mean squared displacement of the square part from its conformal map, "
+                                             "unit-square units^2"}};
+  }
   {
     nlohmann::json rot = nlohmann::json::array();
     for (int i = 0; i < 3; ++i) rot.push_back({r.rotation(i, 0), r.rotation(i, 1), r.rotation(i, 2)});
@@ -216,6 +230,11 @@ void setup(CLI::App& parent) {
                   "the sphere (works on native-resolution meshes); flow: Haker's conformal sphere + Moser flow on the "
                   "sphere; auto: square, and flow if the square route's sphere does not cover it once (docs/maps.md)")
       ->check(CLI::IsMember({"auto", "flow", "square"}))
+      ->capture_default_str();
+  sub->add_option("--refine", a->refine,
+                  "none, or omt: the square route's square map gets the optimal-transport refinement (flatten --refine omt; "
+                  "docs/maps.md) before it is carried to the sphere")
+      ->check(CLI::IsMember({"none", "omt"}))
       ->capture_default_str();
   sub->add_flag("--keep-failed", a->keep_failed,
                 "Expert: write the outputs even when the map fails its acceptance, marked FAILED in their metadata and "

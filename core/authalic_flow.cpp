@@ -36,38 +36,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // each remove < 1 % of the per-face error.
 constexpr int kPolishSlowStepsToStop = 2;
 
-// Bilinear interpolation of a grid of samples at (x0 + c dx, y0 + r dy), clamped at the edges
-// (constant extension beyond the outermost samples).
-struct Bilinear {
-  const MatrixXd* m;
-  double x0, dx, y0, dy;
-  double operator()(double x, double y) const {
-    const int nc = static_cast<int>(m->cols()), nr = static_cast<int>(m->rows());
-    double fx = (x - x0) / dx, fy = (y - y0) / dy;
-    int c0, r0;
-    double tx, ty;
-    locate(fx, nc, &c0, &tx);
-    locate(fy, nr, &r0, &ty);
-    const int c1 = std::min(c0 + 1, nc - 1), r1 = std::min(r0 + 1, nr - 1);
-    const MatrixXd& a = *m;
-    return (1 - ty) * ((1 - tx) * a(r0, c0) + tx * a(r0, c1)) + ty * ((1 - tx) * a(r1, c0) + tx * a(r1, c1));
-  }
-  static void locate(double f, int n, int* i0, double* t) {
-    if (n == 1 || !(f > 0)) {
-      *i0 = 0;
-      *t = 0;
-      return;
-    }
-    if (f >= n - 1) {
-      *i0 = n - 2;
-      *t = 1;
-      return;
-    }
-    *i0 = static_cast<int>(f);
-    *t = f - *i0;
-  }
-};
-
 struct Stats {
   double mean = 0, p99 = 0, max = 0;
 };
@@ -99,16 +67,6 @@ int faces_outside_band(const VectorXd& target, const MatrixXd& UV, const MatrixX
 Stats vertex_stats(const VectorXd& r) {
   const AbsStats s = abs_stats(r);
   return {s.mean, s.p99, s.max};
-}
-
-// Keeps boundary vertices on their side (corners fixed) and everything inside the rectangle.
-inline void constrain(double& x, double& y, int mask, double w) {
-  x = std::clamp(x, 0.0, w);
-  y = std::clamp(y, 0.0, 1.0);
-  if (mask & kSideLeft) x = 0.0;
-  if (mask & kSideRight) x = w;
-  if (mask & kSideBottom) y = 0.0;
-  if (mask & kSideTop) y = 1.0;
 }
 
 }  // namespace
@@ -180,10 +138,10 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
   }
   MatrixXd gx, gy;
   staggered_gradient(g, hx, hy, &gx, &gy);
-  const Bilinear vx{&gx, 0.0, hx, 0.5 * hy, hy};
-  const Bilinear vy{&gy, 0.5 * hx, hx, 0.0, hy};
-  const Bilinear dens{&rho_s, 0.5 * hx, hx, 0.5 * hy, hy};
-  const Bilinear dens_1{&rho_1, 0.5 * hx, hx, 0.5 * hy, hy};
+  const GridBilinear vx{&gx, 0.0, hx, 0.5 * hy, hy};
+  const GridBilinear vy{&gy, 0.5 * hx, hx, 0.0, hy};
+  const GridBilinear dens{&rho_s, 0.5 * hx, hx, 0.5 * hy, hy};
+  const GridBilinear dens_1{&rho_1, 0.5 * hx, hx, 0.5 * hy, hy};
 
   // Which vertices move: those used by a face.
   std::vector<char> used(UV.rows(), 0);
@@ -202,7 +160,7 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
     // Velocity ∇g / ((1 − t) ρ + t) at (x, y), with the side constraint (the normal component
     // is zero on the walls already; zeroing it keeps roundoff from moving a vertex off its side).
     auto vel = [&](double t, double px, double py, double* ux, double* uy) {
-      constrain(px, py, mask, width);
+      constrain_to_rectangle(px, py, mask, width);
       const double s = 1.0 / ((1.0 - t) * dens(px, py) + t * (fraction < 1.0 ? dens_1(px, py) : 1.0));
       *ux = (mask & (kSideLeft | kSideRight)) ? 0.0 : vx(px, py) * s;
       *uy = (mask & (kSideBottom | kSideTop)) ? 0.0 : vy(px, py) * s;
@@ -216,7 +174,7 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
       vel(t + dt, x + dt * k3x, y + dt * k3y, &k4x, &k4y);
       x += dt / 6.0 * (k1x + 2 * k2x + 2 * k3x + k4x);
       y += dt / 6.0 * (k1y + 2 * k2y + 2 * k3y + k4y);
-      constrain(x, y, mask, width);
+      constrain_to_rectangle(x, y, mask, width);
     }
     out(v, 0) = x;
     out(v, 1) = y;
@@ -373,7 +331,7 @@ MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const Matri
   MatrixXd out = UV;
   auto place = [&](Eigen::Index v) {
     double x = UV(v, 0) + lam[v] * D(v, 0), y = UV(v, 1) + lam[v] * D(v, 1);
-    constrain(x, y, side_mask.size() ? side_mask[v] : 0, w);
+    constrain_to_rectangle(x, y, side_mask.size() ? side_mask[v] : 0, w);
     out(v, 0) = x;
     out(v, 1) = y;
   };
@@ -392,7 +350,7 @@ MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const Matri
 void apply_displacement(MatrixXd& UV, const MatrixXd& D, double lambda, const VectorXi& side_mask, double w) {
   for (Eigen::Index v = 0; v < UV.rows(); ++v) {
     double x = UV(v, 0) + lambda * D(v, 0), y = UV(v, 1) + lambda * D(v, 1);
-    constrain(x, y, side_mask.size() ? side_mask[v] : 0, w);
+    constrain_to_rectangle(x, y, side_mask.size() ? side_mask[v] : 0, w);
     UV(v, 0) = x;
     UV(v, 1) = y;
   }
@@ -543,7 +501,7 @@ int untangle_flips(const MatrixXi& F, const VectorXi& side_mask, double width, c
         mean /= static_cast<double>(adj[v].size());
         double x = (m & (kSideLeft | kSideRight)) ? UV(v, 0) : mean.x();
         double y = (m & (kSideBottom | kSideTop)) ? UV(v, 1) : mean.y();
-        constrain(x, y, m, width);
+        constrain_to_rectangle(x, y, m, width);
         UV(v, 0) = x;
         UV(v, 1) = y;
         moved[v] = 1;
@@ -609,7 +567,7 @@ int open_thin_triangles(const MatrixXi& F, const VectorXi& side_mask, double wid
         const double height = 2.0 * a[f] / len, needed = 4.0 * min_area[f] / len;
         const double step = (needed - height) / gain;
         double x = UV(v, 0) + step * n.x(), y = UV(v, 1) + step * n.y();
-        constrain(x, y, m, width);
+        constrain_to_rectangle(x, y, m, width);
         UV(v, 0) = x;
         UV(v, 1) = y;
         break;
@@ -714,7 +672,7 @@ struct Flow {
   Stats stats_of(const MatrixXd& uv) const { return vertex_stats(vertex_log_ratio(target, uv, F, nv)); }
   bool met(const Stats& s) const { return s.mean <= opt.tolerance_mean && s.p99 <= opt.tolerance_p99; }
   MatrixXd constrained(MatrixXd P) const {
-    for (Eigen::Index v = 0; v < P.rows(); ++v) constrain(P(v, 0), P(v, 1), side_mask.size() ? side_mask[v] : 0, w);
+    for (Eigen::Index v = 0; v < P.rows(); ++v) constrain_to_rectangle(P(v, 0), P(v, 1), side_mask.size() ? side_mask[v] : 0, w);
     return P;
   }
 };

@@ -25,6 +25,7 @@
 //    then may flip a triangle; if any triangle is flipped or degenerate, the map is recomputed
 //    with Floater's mean-value weights (positive, so Tutte/Floater guarantees an embedding on the
 //    convex rectangle once dividing edges are split), and with uniform weights as a last resort.
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,7 @@
 namespace authalic {
 
 // The rectangle's perimeter coordinate, side bits and anchor positions: core/domain.h.
+
 
 // ClampedCotangent: the cotangent weights raised to 1 % of their mean |value|, so all are
 // positive (a Tutte embedding like mean-value weights, but symmetric: one Cholesky solve).

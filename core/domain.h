@@ -13,6 +13,7 @@
 //    Archimedes), in (u, v) = ((longitude + pi) / (2 pi), (z + 1) / 2) coordinates.
 // Element id = row * cols + col, row 0 at the bottom (y = 0, z = -1), column 0 at x = 0
 // (longitude -pi).
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -31,6 +32,16 @@ DomainKind parse_domain_kind(const std::string& name, const std::string& what);
 
 // Side bits of a boundary vertex of a planar domain (corners carry two).
 enum RectangleSide : int { kSideBottom = 1, kSideRight = 2, kSideTop = 4, kSideLeft = 8 };
+
+// Keeps a boundary vertex on its side (corners fixed) and any vertex inside [0, W] x [0, 1].
+inline void constrain_to_rectangle(double& x, double& y, int side_mask, double width) {
+  x = std::clamp(x, 0.0, width);
+  y = std::clamp(y, 0.0, 1.0);
+  if (side_mask & kSideLeft) x = 0.0;
+  if (side_mask & kSideRight) x = width;
+  if (side_mask & kSideBottom) y = 0.0;
+  if (side_mask & kSideTop) y = 1.0;
+}
 
 // Perimeter coordinate of the rectangle [0, W] x [0, 1]: s in [0, 2W + 2), counter-clockwise from
 // the corner (0, 0): bottom side s in [0, W), right side [W, W + 1), top side [W + 1, 2W + 1)

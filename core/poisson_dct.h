@@ -17,6 +17,7 @@
 //   (2 cos(π k / nx) − 2) / hx² + (2 cos(π l / ny) − 2) / hy²,
 // so g = IDCT(DCT(f) / eigenvalue), the constant mode (eigenvalue 0) set to zero: g has zero mean
 // and the solve implicitly removes the mean of f (the compatibility condition of the Neumann problem).
+#include <algorithm>
 #include <vector>
 
 #include "core/mesh.h"
@@ -68,5 +69,37 @@ class NeumannPoissonGrid {
 // gy ((ny+1) x nx) at the horizontal faces y = r hy. The wall values are exactly zero (Neumann),
 // so a velocity interpolated from them has no normal component on the walls.
 void staggered_gradient(const MatrixXd& g, double hx, double hy, MatrixXd* gx, MatrixXd* gy);
+
+// Bilinear interpolation of a grid of samples at (x0 + c dx, y0 + r dy) (row r, column c of *m),
+// clamped at the edges (constant extension beyond the outermost samples). For cell-centred fields
+// x0 = dx / 2, y0 = dy / 2; for the staggered components of staggered_gradient x0 = 0 or y0 = 0.
+struct GridBilinear {
+  const MatrixXd* m;
+  double x0, dx, y0, dy;
+  double operator()(double x, double y) const {
+    const int nc = static_cast<int>(m->cols()), nr = static_cast<int>(m->rows());
+    int c0, r0;
+    double tx, ty;
+    locate((x - x0) / dx, nc, &c0, &tx);
+    locate((y - y0) / dy, nr, &r0, &ty);
+    const int c1 = std::min(c0 + 1, nc - 1), r1 = std::min(r0 + 1, nr - 1);
+    const MatrixXd& a = *m;
+    return (1 - ty) * ((1 - tx) * a(r0, c0) + tx * a(r0, c1)) + ty * ((1 - tx) * a(r1, c0) + tx * a(r1, c1));
+  }
+  static void locate(double f, int n, int* i0, double* t) {
+    if (n == 1 || !(f > 0)) {
+      *i0 = 0;
+      *t = 0;
+      return;
+    }
+    if (f >= n - 1) {
+      *i0 = n - 2;
+      *t = 1;
+      return;
+    }
+    *i0 = static_cast<int>(f);
+    *t = f - *i0;
+  }
+};
 
 }  // namespace authalic

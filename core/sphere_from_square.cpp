@@ -203,6 +203,7 @@ MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const Sphe
   const SquareMapResult sq = square_map(V, FB, so, progress);
   R.square_flow = sq.flow;
   R.square_stretch = sq.stretch;
+  R.square_transport = sq.transport;
   MatrixXd unit = 2.0 * sq.UV.topRows(nv).array() - 1.0;
   const MatrixXd disk_b = concentric_square_to_disk(unit);
   MatrixXd S = MatrixXd::Zero(nv, 3);

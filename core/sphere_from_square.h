@@ -65,6 +65,7 @@ struct SphereFromSquareReport {
   int seed_vertex = -1;          // the cap's centre
   FlowReport square_flow;        // B's square map: its flow and stretch-energy start
   StretchEnergyReport square_stretch;
+  OptimalTransportReport square_transport;  // B's optimal-transport refinement, when asked for
   StretchEnergyReport cap;       // C's stretch-energy iterations
   CrushedPatchReport crushed;    // the radial rearrangement of crushed patches
   SphereFlowReport sphere_flow;  // the coarse pass on the joined sphere

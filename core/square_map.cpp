@@ -111,6 +111,25 @@ int keep_orientation_in_single_precision(const MatrixXd& V, const MatrixXi& F, c
 }
 }  // namespace
 
+namespace {
+
+// The optimal-transport refinement of an authalic map UV, then the area-restoring flow from it
+// (the refinement keeps area only to first order).
+FlowResult refine_by_optimal_transport(const ConformalMapResult& init, const VectorXd& measure, const MatrixXd& UV,
+                                       const SquareMapOptions& opt, const FlowOptions& fo, const ProgressFn& progress,
+                                       OptimalTransportReport* out) {
+  report(progress, "transport", -1, "optimal-transport refinement");
+  OptimalTransportResult ot = optimal_transport_refine(init.UV, UV, init.F, init.side_mask, opt.width, measure, opt.transport);
+  *out = ot.report;
+  std::ostringstream msg;
+  msg << "optimal transport: " << ot.report.iterations << " steps, cost " << ot.report.initial_cost << " -> "
+      << ot.report.final_cost << " (" << ot.report.stop_reason << ")";
+  report(progress, "transport", -1, msg.str());
+  return authalic_flow(init.V, init.F, ot.UV, init.side_mask, fo, progress);
+}
+
+}  // namespace
+
 SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const SquareMapOptions& opt, const ProgressFn& progress) {
   if (V.cols() != 3) throw InputError("surface: vertex coordinates must be 3D; give a 3D surface");
   if (!(opt.width > 0)) throw InputError("square map: the rectangle width must be positive");
@@ -169,6 +188,9 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
     report(progress, "stretch", -1, msg.str());
   }
   FlowResult flow = authalic_flow(init.V, init.F, start, init.side_mask, fo, progress);
+  const VectorXd measure = target_face_measure(init.V, init.F, fo.density, opt.width);
+  if (opt.optimal_transport) flow = refine_by_optimal_transport(init, measure, flow.UV, opt, fo, progress, &R.transport);
+  R.transport_cost = transport_cost(init.UV, flow.UV, init.F, measure);
 
   R.V = std::move(init.V);
   R.F = std::move(init.F);

@@ -25,6 +25,7 @@
 #include "core/authalic_flow.h"
 #include "core/conformal_map.h"
 #include "core/mesh.h"
+#include "core/optimal_transport.h"
 #include "core/progress.h"
 #include "core/stretch_energy.h"
 
@@ -53,6 +54,11 @@ struct SquareMapOptions {
   // The caller's require_disk report of (V, F) (e.g. from reading the cortex region): the disk
   // check is then not made a second time.
   std::optional<TopologyReport> region_topology;
+  // Optimal-transport refinement (core/optimal_transport.h) after the flow, then the flow again
+  // from the refined map to restore exact areas: the area-preserving map that moves area the
+  // least from the conformal start (lower angle distortion).
+  bool optimal_transport = false;
+  OptimalTransportOptions transport;
 };
 
 struct SquareMapResult {
@@ -70,6 +76,10 @@ struct SquareMapResult {
   ConformalMapResult initial;  // split counts, weights used (V/F/UV moved into the fields above)
   StretchEnergyReport stretch;
   FlowReport flow;
+  // Transport cost ∫ |x − T(x)|² dμ / ∫ dμ of UV from UV_initial (always); with the refinement,
+  // transport holds its report (initial_cost: the unrefined map's cost) and flow the final flow's.
+  double transport_cost = 0;
+  OptimalTransportReport transport;
   int flips = 0;             // flipped or degenerate faces of UV (0 unless something failed)
 };
 

@@ -340,3 +340,30 @@ TEST(RectangleCli, RefusesMixedOrMissingForms) {
   EXPECT_EQ(run_command(authalic_binary() + " rectangle /tmp/x --lh a.gii", &output), 2) << output;  // --rh missing
   EXPECT_EQ(run_command(authalic_binary() + " rectangle /tmp/x --surface a.gii --lh a.gii --rh b.gii", &output), 2) << output;
 }
+
+// `sphere --refine omt` (issue 18 part 1): the square route's square part is refined by optimal
+// transport before it is carried to the sphere; the sphere stays authalic and says what was done.
+// The flow route has no square part: refused, nothing written.
+TEST(SphereCli, OptimalTransportRefinementOfTheSquareRoute) {
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  const std::string dir = authalic::test::temp_dir("sphere_omt");
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " sphere " + white + " " + dir + "/s.surf.gii --refine omt --metrics " + dir +
+                            "/m.json -q",
+                        &output),
+            0)
+      << output;
+  const auto j = read_json(dir + "/m.json");
+  EXPECT_EQ(j.at("refine"), "omt");
+  EXPECT_EQ(j.at("route"), "square");
+  const auto& t = j.at("square_route_transport");
+  EXPECT_GT(t.at("iterations").get<int>(), 0);
+  EXPECT_LT(t.at("cost_after_refinement").get<double>(), t.at("cost_before").get<double>());
+  EXPECT_EQ(j.at("metrics").at("flips"), 0);
+  EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.005);
+  EXPECT_NE(run_command(authalic_binary() + " sphere " + white + " " + dir + "/f.surf.gii --refine omt --route flow -q",
+                        &output),
+            0);
+  EXPECT_NE(output.find("--refine omt"), std::string::npos) << output;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/f.surf.gii"));
+}
