@@ -5,7 +5,6 @@
 #include <cmath>
 #include <filesystem>
 
-#include "analysis/raster.h"
 #include "analysis/render.h"
 #include "common/test_data.h"
 #include "core/error.h"
@@ -19,7 +18,6 @@ using authalic::VectorXi;
 using authalic::analysis::Rgb;
 using authalic::io::RgbImage;
 namespace an = authalic::analysis;
-namespace raster = authalic::analysis::raster;
 
 Rgb pixel(const RgbImage& img, int x, int y) {
   const auto* p = img.pixel(x, y);
@@ -416,38 +414,51 @@ TEST(RenderHistograms, OnePanelPerSeries) {
   EXPECT_THROW(an::render_histograms({}, {}, 10, 100, 100), std::invalid_argument);
 }
 
-TEST(Raster, FontGlyphsAndText) {
-  // '1' and 'A' rows as drawn; unknown code points fall back to '?'.
-  EXPECT_EQ(raster::glyph(U'A')[3], 0b11111);
-  EXPECT_EQ(raster::glyph(U'1')[6], 0b01110);
-  EXPECT_EQ(raster::glyph(0x4E00), raster::glyph(U'?'));
-  EXPECT_EQ(raster::glyph(0x039B)[0], 0b00100);  // Λ
-  const auto cps = raster::decode_utf8("aΛ²");
-  ASSERT_EQ(cps.size(), 3u);
-  EXPECT_EQ(cps[1], 0x039Bu);
-  EXPECT_EQ(cps[2], 0x00B2u);
-  EXPECT_EQ(raster::text_width("abc", 2), (3 * 6 - 1) * 2);
-  RgbImage img(20, 10, 255);
-  raster::draw_text(img, 1, 1, "I", {0, 0, 0}, 1);
-  // 'I' = .###. / ..#.. x5 / .###.
-  EXPECT_EQ(pixel(img, 2, 1), (Rgb{0, 0, 0}));
-  EXPECT_EQ(pixel(img, 1, 1), (Rgb{255, 255, 255}));
-  EXPECT_EQ(pixel(img, 3, 4), (Rgb{0, 0, 0}));
-  EXPECT_EQ(pixel(img, 2, 4), (Rgb{255, 255, 255}));
-  EXPECT_EQ(count_colour(img, {0, 0, 0}), 3 + 5 + 3);
+TEST(Canvas, TextIsDrawnInARealFontAndMeasured) {
+  // DejaVu Sans through Cairo: wider text measures wider, a 13 px line is about 15 px tall, and
+  // the glyphs are anti-aliased (gray levels between ink and paper).
+  EXPECT_GT(an::text_width("WWW", 13), an::text_width("iii", 13));
+  EXPECT_NEAR(an::text_width("abc", 26), 2 * an::text_width("abc", 13), 1.0);
+  EXPECT_GT(an::text_line_height(13), 13.0);
+  EXPECT_LT(an::text_line_height(13), 18.0);
+  an::Canvas cv(80, 30);
+  an::TextStyle ts;
+  ts.size = 20;
+  cv.text(4, 2, "Hg", ts);
+  const RgbImage img = cv.to_image();
+  long ink = 0, grey = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const int v = pixel(img, x, y)[0];
+      ink += v < 60;
+      grey += v >= 60 && v < 200;
+    }
+  EXPECT_GT(ink, 40);
+  EXPECT_GT(grey, 10);
+  // Word wrap keeps every line within the width.
+  for (const auto& line : an::wrap_text("Hypometabolism in left precuneus and posterior cingulate, peak z -4.9", 13, 150))
+    EXPECT_LE(an::text_width(line, 13), 150.0) << line;
+}
+
+TEST(Canvas, NumbersForPeople) {
+  EXPECT_EQ(an::format_fixed(61.8, 1), "61.8");
+  EXPECT_EQ(an::format_fixed(-0.04, 1), "0.0");
+  EXPECT_EQ(an::format_fixed(-4.94, 1, true), "\u22124.9");
+  EXPECT_EQ(an::format_fixed(std::nan(""), 1), "n/a");
 }
 
 TEST(Raster, NiceTicks) {
   double step = 0;
-  const auto t = raster::nice_ticks(0, 1, 5, &step);
+  const auto t = an::nice_ticks(0, 1, 5, &step);
   ASSERT_EQ(t.size(), 6u);
   EXPECT_DOUBLE_EQ(step, 0.2);
-  EXPECT_EQ(raster::format_tick(t[2], step), "0.4");
-  const auto z = raster::nice_ticks(-3, 3, 5, &step);
+  EXPECT_EQ(an::format_tick(t[2], step), "0.4");
+  const auto z = an::nice_ticks(-3, 3, 5, &step);
   EXPECT_DOUBLE_EQ(step, 2.0);
   EXPECT_EQ(z, (std::vector<double>{-2, 0, 2}));
-  EXPECT_EQ(raster::format_tick(0.25, 0.25), "0.25");
-  EXPECT_EQ(raster::format_tick(1500, 500), "1500");
+  EXPECT_EQ(an::format_tick(-2, step), "\u22122");  // a typeset minus
+  EXPECT_EQ(an::format_tick(0.25, 0.25), "0.25");
+  EXPECT_EQ(an::format_tick(1500, 500), "1500");
 }
 
 TEST(RenderPng, RoundTripsThroughWriteAndRead) {

@@ -1,0 +1,33 @@
+#pragma once
+// The report's pictures, drawn once and used by both the HTML page and the PDF: the eight
+// standard 3D views of z (thresholded over sulcal-shaded grey cortex) and of PET, and the flat
+// square and rectangle maps with a light element grid (analysis/render.h).
+#include <string>
+#include <vector>
+
+#include "analysis/report.h"
+#include "io/image_io.h"
+
+namespace authalic::analysis {
+
+struct ReportFigure {
+  io::RgbImage image;
+  std::string alt, caption;
+};
+
+struct ReportFigures {
+  std::vector<ReportFigure> views;      // standard views: z (when compared), then PET
+  std::vector<ReportFigure> flat_maps;  // per hemisphere z and PET on the square; the rectangle
+};
+
+// z colours: coolwarm over [-kReportZRange, kReportZRange], the same in every report; beyond it
+// the colour bar marks saturation ("≤ −5").
+constexpr double kReportZRange = 5.0;
+
+ReportFigures report_figures(const ReportData& data);
+
+// Per-vertex z of a hemisphere: given, or spread from the element z-scores through each
+// vertex's element (NaN outside the elements); empty when there is none.
+VectorXd report_vertex_z(const ReportHemisphere& h);
+
+}  // namespace authalic::analysis
