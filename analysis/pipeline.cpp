@@ -820,15 +820,17 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   io::write_workbench_spec((stage / spec_name).string(), spec);
   summary.files.push_back(spec_name);
 
+  for (const auto& [base, j] : sidecars) io::write_file_atomically((stage / (base + ".json")).string(), j.dump(2) + "\n");
+  log.end(summary);
   if (options.report) {
+    log.begin("report (HTML and PDF)");
     const ReportData rd = report_data(in, options, hemis, rect, table, compare ? &cmp : nullptr, reference, params, summary, registration);
     write_report((stage / names.report()).string(), rd);
     write_report_pdf((stage / names.report_pdf()).string(), rd);
     summary.files.push_back(names.report());
     summary.files.push_back(names.report_pdf());
+    log.end(summary);
   }
-  for (const auto& [base, j] : sidecars) io::write_file_atomically((stage / (base + ".json")).string(), j.dump(2) + "\n");
-  log.end(summary);
   io::write_file_atomically((stage / names.log()).string(), software_version() + "\nsubject sub-" + in.id + "\n" + log.text());
   summary.files.push_back(names.log());
 

@@ -1,9 +1,9 @@
 // 3D surface views (see analysis/render.h): an orthographic z-buffer scan conversion with
-// Lambert shading, in software. Why not a library: Debian's VTK renders only through OpenGL
-// with an X server or EGL device (vtkXOpenGLRenderWindow; its off-screen OSMesa build is not
-// packaged), and Cairo has no depth test; measured here, a headless `vtkRenderWindow` aborts
-// without $DISPLAY. This file is the one place that keeps its own rasteriser; labels, frames,
-// colour bars and layout go through Cairo (analysis/canvas.h).
+// Lambert shading, in software. Why not a library: Debian 12's VTK 9.1 renders only through
+// OpenGL on an X display (libvtkRenderingOpenGL2-9.1.so links libX11 and neither OSMesa nor
+// EGL, checked with ldd), so it cannot draw on a headless server, and Cairo has no depth test.
+// This file is the one place that keeps its own rasteriser; labels, frames, colour bars and
+// layout go through Cairo (analysis/canvas.h).
 #include <algorithm>
 #include <cmath>
 #include <limits>

@@ -12,6 +12,8 @@ PACKAGES=(
   clang libclang-rt-14-dev libomp-dev      # libFuzzer targets (scripts/fuzz.sh), ThreadSanitizer
   connectome-workbench                     # wb_command: reference values for the sampling tests
   chromium                                 # headless screenshot of the HTML report (test)
+  libcairo2-dev fonts-dejavu-core          # every picture and the PDF report (Cairo, DejaVu Sans)
+  poppler-utils                            # pdftoppm/pdfinfo: the PDF report's test and bench
   snakemake                                # workflow/Snakefile (cohorts beyond one machine; tested)
 )
 export DEBIAN_FRONTEND=noninteractive

@@ -381,6 +381,46 @@ TEST(RenderSurfaceViews, PanelsSideBySideAndDeterministic) {
   EXPECT_EQ(a.rgb, b.rgb);
 }
 
+TEST(RenderStandardViews, EightPanelsThresholdedOverGreyAndOneScale) {
+  // Two planar "hemispheres" facing +-x; only the left one has |z| above the threshold, on its
+  // anterior half.
+  an::HemisphereSurface left, right;
+  plane_grid(21, &left.V, &left.F);
+  right.V = left.V;
+  left.V.col(0).array() -= 30.0;
+  right.V.col(0).array() += 30.0;
+  right.left = false;
+  left.values = (left.V.col(1).array() > 0).cast<double>() * -3.0;
+  right.values = VectorXd::Zero(right.V.rows());
+  left.background = right.background = VectorXd::Constant(left.V.rows(), 0.5);
+  an::ScalarColouring c;
+  c.colormap = "coolwarm";
+  c.vmin = -5;
+  c.vmax = 5;
+  c.threshold = 2;
+  c.label = "z";
+  an::StandardViewsOptions o;
+  const RgbImage img = an::render_standard_views({left, right}, c, o);
+  EXPECT_GT(img.width, 4 * o.panel_width);
+  EXPECT_GT(img.height, 2 * o.panel_height);
+  auto coloured = [&](int x0, int x1, int y0, int y1) {
+    long n = 0;
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const Rgb p = pixel(img, x, y);
+        n += p[2] > p[0] + 40;  // blue, not grey
+      }
+    return n;
+  };
+  const int W = o.panel_width, half = img.height / 2;
+  EXPECT_EQ(coloured(0, W, 0, half), 0) << "right lateral shows only the right hemisphere (all below threshold)";
+  EXPECT_GT(coloured(W, 2 * W, 0, half), 1000) << "left lateral shows the left hemisphere's abnormal half";
+  // Grey below the threshold: r = g = b (sulcal shading), in the right lateral panel.
+  EXPECT_EQ(pixel(img, W / 2, half / 2)[0], pixel(img, W / 2, half / 2)[2]);
+  // The colour bar marks the threshold band in grey and the ends.
+  EXPECT_THROW(an::render_standard_views({}, c, o), std::invalid_argument);
+}
+
 TEST(RenderHistograms, BarHeightsFollowTheCounts) {
   std::vector<double> s(40, 0.0);
   for (int i = 10; i < 40; ++i) s[i] = 1.0;  // 10 zeros, 30 ones
