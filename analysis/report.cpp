@@ -43,6 +43,7 @@ th { background: #f0f0f4; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
 .figures { display: flex; flex-wrap: wrap; gap: 16px; align-items: flex-start; }
 figure { margin: 0; }
+.viewer canvas { width: 960px; height: 560px; max-width: 100%; border: 1px solid #e0e0e0; }
 .columns { display: flex; flex-wrap: wrap; gap: 24px; align-items: flex-start; }
 p.summary { font-size: 17px; font-weight: bold; margin: 6px 0; }
 p.disclaimer { font-size: 13px; color: #555; font-style: italic; }
@@ -280,6 +281,7 @@ std::string report_html(const ReportData& d) {
   header_section(out, d);
   summary_section(out, d);
   views_section(out, figures);
+  viewer_section(out, d);
   clusters_section(out, d);
   regions_section(out, d);
   flat_section(out, figures);

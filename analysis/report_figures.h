@@ -2,6 +2,7 @@
 // The report's pictures, drawn once and used by both the HTML page and the PDF: the eight
 // standard 3D views of z (thresholded over sulcal-shaded grey cortex) and of PET, and the flat
 // square and rectangle maps with a light element grid (analysis/render.h).
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -29,5 +30,8 @@ ReportFigures report_figures(const ReportData& data);
 // Per-vertex z of a hemisphere: given, or spread from the element z-scores through each
 // vertex's element (NaN outside the elements); empty when there is none.
 VectorXd report_vertex_z(const ReportHemisphere& h);
+
+// The HTML report's interactive section (analysis/report_viewer.cpp).
+void viewer_section(std::ostringstream& out, const ReportData& data);
 
 }  // namespace authalic::analysis
