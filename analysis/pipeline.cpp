@@ -21,6 +21,7 @@
 #include "analysis/render.h"
 #include "analysis/regions.h"
 #include "analysis/report.h"
+#include "analysis/report_figures.h"
 #include "analysis/report_inputs.h"
 #include "analysis/sampling.h"
 #include "core/authalic_flow.h"
@@ -825,8 +826,9 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   if (options.report) {
     log.begin("report (HTML and PDF)");
     const ReportData rd = report_data(in, options, hemis, rect, table, compare ? &cmp : nullptr, reference, params, summary, registration);
-    write_report((stage / names.report()).string(), rd);
-    write_report_pdf((stage / names.report_pdf()).string(), rd);
+    const ReportFigures figures = report_figures(rd);  // drawn once for both
+    write_report((stage / names.report()).string(), rd, figures);
+    write_report_pdf((stage / names.report_pdf()).string(), rd, figures);
     summary.files.push_back(names.report());
     summary.files.push_back(names.report_pdf());
     log.end(summary);

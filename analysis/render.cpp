@@ -192,29 +192,30 @@ std::vector<std::pair<double, std::string>> colour_bar_ticks(const ScalarColouri
 constexpr double kBarGap = 12, kBarWidth = 14, kTickLength = 4, kArrow = 12;
 
 // The units label in lines of at most ~11 em.
-std::vector<std::string> bar_label_lines(const ScalarColouring& c) {
-  return wrap_text(c.label, kTickFontSize, std::max(80.0, text_width(c.label, kTickFontSize) / 3.0));
+std::vector<std::string> bar_label_lines(const ScalarColouring& c, double font) {
+  return wrap_text(c.label, font, std::max(6.0 * font, text_width(c.label, font) / 3.0));
 }
 
 }  // namespace
 
-int colour_bar_extent(const ScalarColouring& c, const Saturation& s) {
+int colour_bar_extent(const ScalarColouring& c, const Saturation& s, double font) {
   double labels = 0;
-  for (const auto& [v, label] : colour_bar_ticks(c, s)) labels = std::max(labels, text_width(label, kTickFontSize));
+  for (const auto& [v, label] : colour_bar_ticks(c, s)) labels = std::max(labels, text_width(label, font));
   const double body = kBarWidth + kTickLength + 4 + labels;
   // A long units label wraps rather than widening the bar (and shrinking the plot).
   double label = 0;
-  for (const std::string& l : bar_label_lines(c)) label = std::max(label, text_width(l, kTickFontSize));
+  for (const std::string& l : bar_label_lines(c, font)) label = std::max(label, text_width(l, font));
   return static_cast<int>(std::ceil(kBarGap + std::max(body, label) + 4));
 }
 
-void draw_colour_bar(Canvas& cv, double x, double top, double height, const ScalarColouring& c, const Saturation& s) {
+void draw_colour_bar(Canvas& cv, double x, double top, double height, const ScalarColouring& c, const Saturation& s,
+                     double font) {
   const ColourTable table(c);
-  const double line = text_line_height(kTickFontSize);
+  const double line = text_line_height(font);
   double bar_top = top + line / 2;
   TextStyle ts;
-  ts.size = kTickFontSize;
-  for (const std::string& l : bar_label_lines(c)) {
+  ts.size = font;
+  for (const std::string& l : bar_label_lines(c, font)) {
     cv.text(x + kBarGap, bar_top - line / 2, l, ts);
     bar_top += line;
   }
@@ -290,36 +291,38 @@ const Rgb kBlack{0, 0, 0};
 
 bool has_values(const ScalarColouring& c) { return c.values.size() > 0; }
 
+double title_size(double font) { return font * kTitleFontSize / kTickFontSize; }
+
 // The frame, plot position and colour bar room shared by the flat map and the element image.
-FlatLayout frame_layout(int plot_width, int plot_height, const std::string& title, int bar_extent) {
+FlatLayout frame_layout(int plot_width, int plot_height, const std::string& title, int bar_extent, double font = kTickFontSize) {
   FlatLayout L;
   const int m = static_cast<int>(kMargin);
-  const int title_height = title.empty() ? 0 : static_cast<int>(std::ceil(text_line_height(kTitleFontSize))) + 6;
+  const int title_height = title.empty() ? 0 : static_cast<int>(std::ceil(text_line_height(title_size(font)))) + 6;
   L.left = m + 2;
-  L.top = m + title_height + static_cast<int>(std::ceil(text_line_height(kTickFontSize) / 2));
+  L.top = m + title_height + static_cast<int>(std::ceil(text_line_height(font) / 2));
   L.plot_width = plot_width;
   L.plot_height = plot_height;
   const int right = bar_extent > 0 ? bar_extent + m : m;
-  L.width = std::max(L.left + plot_width + right, static_cast<int>(std::ceil(text_width(title, kTitleFontSize, true))) + 2 * m);
-  L.height = L.top + plot_height + m + static_cast<int>(std::ceil(text_line_height(kTickFontSize) / 2));
+  L.width = std::max(L.left + plot_width + right, static_cast<int>(std::ceil(text_width(title, title_size(font), true))) + 2 * m);
+  L.height = L.top + plot_height + m + static_cast<int>(std::ceil(text_line_height(font) / 2));
   return L;
 }
 
 // Title, frame (just outside the plot, so it never hides data) and colour bar.
 void draw_frame_decorations(Canvas& cv, const FlatLayout& L, const std::string& title, const ScalarColouring* bar,
-                            const Saturation& s) {
+                            const Saturation& s, double font = kTickFontSize) {
   cv.stroke_rect(L.left - 1, L.top - 1, L.plot_width + 2, L.plot_height + 2, kBlack);
   if (!title.empty()) {
     TextStyle ts;
-    ts.size = kTitleFontSize;
+    ts.size = title_size(font);
     ts.bold = true;
     ts.align = Align::Centre;
     // Centred over the plot, but never past the picture's left edge (a title wider than the plot).
-    const double half = text_width(title, kTitleFontSize, true) / 2;
+    const double half = text_width(title, title_size(font), true) / 2;
     cv.text(std::max(L.left + L.plot_width / 2.0, half + kMargin), kMargin, title, ts);
   }
-  if (bar) draw_colour_bar(cv, L.left + L.plot_width + 1, L.top - text_line_height(kTickFontSize) / 2,
-                           L.plot_height + text_line_height(kTickFontSize), *bar, s);
+  if (bar) draw_colour_bar(cv, L.left + L.plot_width + 1, L.top - text_line_height(font) / 2,
+                           L.plot_height + text_line_height(font), *bar, s, font);
 }
 
 // Light lines over the element-grid boundaries: dark at 35 % opacity, so they read on any
@@ -356,12 +359,12 @@ FlatLayout flat_layout(const FlatRenderOptions& options, const ScalarColouring& 
   }
   const bool bar = options.draw_colour_bar && has_values(colouring);
   const Saturation s = saturation_of(colouring.values.data(), static_cast<std::size_t>(colouring.values.size()), colouring);
-  const int extent = bar ? colour_bar_extent(colouring, s) : 0;
+  const int extent = bar ? colour_bar_extent(colouring, s, options.font_size) : 0;
   // The plot takes what the margins and the colour bar leave of the requested width.
-  const FlatLayout probe = frame_layout(0, 0, {}, extent);
+  const FlatLayout probe = frame_layout(0, 0, {}, extent, options.font_size);
   const int plot_width = std::max(16, options.width - probe.width);
   const int plot_height = std::max(1, static_cast<int>(std::lround(plot_width * options.domain_height / options.domain_width)));
-  return frame_layout(plot_width, plot_height, options.title, extent);
+  return frame_layout(plot_width, plot_height, options.title, extent, options.font_size);
 }
 
 io::RgbImage render_flat(const MatrixXd& UV, const MatrixXi& F, const ScalarColouring& colouring,
@@ -387,14 +390,15 @@ io::RgbImage render_flat(const MatrixXd& UV, const MatrixXi& F, const ScalarColo
   if (options.grid_cols > 0 || options.grid_rows > 0) draw_grid_lines(cv, L, options.grid_cols, options.grid_rows);
   const bool bar = options.draw_colour_bar && has_values(colouring);
   draw_frame_decorations(cv, L, options.title, bar ? &colouring : nullptr,
-                         saturation_of(colouring.values.data(), static_cast<std::size_t>(colouring.values.size()), colouring));
+                         saturation_of(colouring.values.data(), static_cast<std::size_t>(colouring.values.size()), colouring),
+                         options.font_size);
   return cv.to_image();
 }
 
 FlatLayout element_grid_layout(int rows, int cols, const ScalarColouring& colouring, int cell_pixels,
                                const std::string& title) {
   return frame_layout(cols * std::max(cell_pixels, 1), rows * std::max(cell_pixels, 1), title,
-                      colour_bar_extent(colouring, Saturation{}));
+                      colour_bar_extent(colouring, Saturation{}, kTickFontSize));
 }
 
 io::RgbImage render_element_grid(const std::vector<double>& values, int rows, int cols, const ScalarColouring& colouring,
@@ -405,7 +409,7 @@ io::RgbImage render_element_grid(const std::vector<double>& values, int rows, in
   }
   cell_pixels = std::max(cell_pixels, 1);
   const Saturation s = saturation_of(values.data(), values.size(), colouring);
-  FlatLayout L = frame_layout(cols * cell_pixels, rows * cell_pixels, title, colour_bar_extent(colouring, s));
+  FlatLayout L = frame_layout(cols * cell_pixels, rows * cell_pixels, title, colour_bar_extent(colouring, s, kTickFontSize));
   const ColourTable table(colouring);
   io::RgbImage plot(L.plot_width, L.plot_height, 255);
   for (int r = 0; r < rows; ++r) {

@@ -40,6 +40,7 @@ struct FlatRenderOptions {
   int grid_cols = 0, grid_rows = 0;  // element grid lines drawn when > 0
   bool draw_colour_bar = true;
   std::string title;
+  double font_size = 13.0;         // labels, px (the title is 16/13 of it)
 };
 // Where render_flat / render_element_grid put the domain: the pixel rectangle
 // [left, left + plot_width) x [top, top + plot_height) of an image width x height. Domain x maps
@@ -113,6 +114,7 @@ struct HemisphereSurface {
 struct StandardViewsOptions {
   int panel_width = 280, panel_height = 220;
   std::string title;
+  double font_size = 13.0;  // captions and colour-bar labels, px (the title is 16/13 of it)
 };
 // colouring: range, map, threshold and label (its values/background are ignored: each
 // hemisphere brings its own).

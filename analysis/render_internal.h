@@ -50,8 +50,10 @@ constexpr double kMargin = 10.0;
 // Horizontal room the colour bar takes right of a plot, and the bar itself: vertical, vmin at
 // the bottom, units above, ticks at nice values plus the threshold; saturated ends get an arrow
 // head and a "≤"/"≥" label; the band hidden by a threshold is drawn in the NaN colour.
-int colour_bar_extent(const ScalarColouring& c, const Saturation& s);
-void draw_colour_bar(Canvas& canvas, double x, double top, double height, const ScalarColouring& c, const Saturation& s);
+// font: the labels' size in pixels.
+int colour_bar_extent(const ScalarColouring& c, const Saturation& s, double font);
+void draw_colour_bar(Canvas& canvas, double x, double top, double height, const ScalarColouring& c, const Saturation& s,
+                     double font);
 
 void check_mesh(const MatrixXd& V, const MatrixXi& F, const ScalarColouring& c, int min_cols, const char* who);
 

@@ -208,7 +208,7 @@ io::RgbImage render_surface_views(const MatrixXd& V, const MatrixXi& F, const Sc
   const int title_height = options.title.empty() ? 0 : static_cast<int>(std::ceil(text_line_height(kTitleFontSize))) + m;
   const int top = m + title_height;
   const int caption_height = static_cast<int>(std::ceil(text_line_height(kTickFontSize))) + m;
-  const int bar_extent = bar ? colour_bar_extent(colouring, sat) + m : 0;
+  const int bar_extent = bar ? colour_bar_extent(colouring, sat, kTickFontSize) + m : 0;
   const int width = std::max(n * W + bar_extent, static_cast<int>(std::ceil(text_width(options.title, kTitleFontSize, true))) + 2 * m);
   Canvas cv(width, top + H + caption_height + m);
   TextStyle ts;
@@ -232,7 +232,7 @@ io::RgbImage render_surface_views(const MatrixXd& V, const MatrixXi& F, const Sc
     cv.image(panel, i * W, top);
     cv.text(i * W + W / 2.0, top + H + m / 2.0, view_name(views[i]), ts);
   }
-  if (bar) draw_colour_bar(cv, n * W, top + H / 8.0, H - H / 4.0, colouring, sat);
+  if (bar) draw_colour_bar(cv, n * W, top + H / 8.0, H - H / 4.0, colouring, sat, kTickFontSize);
   return cv.to_image();
 }
 
@@ -305,6 +305,7 @@ io::RgbImage render_standard_views(const std::vector<HemisphereSurface>& hemisph
   for (int k = 0; k < 2; ++k)
     if (side[k]) single[k] = panel_mesh({side[k]}, colouring);
   const int W = options.panel_width, H = options.panel_height, m = static_cast<int>(kMargin);
+  const double font = options.font_size, title_font = font * kTitleFontSize / kTickFontSize;
   // One scale for every panel, so sizes compare across views.
   std::vector<PanelCamera> cams(8);
   std::vector<const PanelMesh*> meshes(8, nullptr);
@@ -322,18 +323,18 @@ io::RgbImage render_standard_views(const std::vector<HemisphereSurface>& hemisph
     cams[i].centre = 0.5 * (lo + hi);
   }
   const Saturation sat = saturation_of_values(whole.colouring);
-  const int bar_extent = colour_bar_extent(colouring, sat) + m;
-  const int title_height = options.title.empty() ? 0 : static_cast<int>(std::ceil(text_line_height(kTitleFontSize))) + m;
-  const int caption = static_cast<int>(std::ceil(text_line_height(kTickFontSize))) + 4;
+  const int bar_extent = colour_bar_extent(colouring, sat, font) + m;
+  const int title_height = options.title.empty() ? 0 : static_cast<int>(std::ceil(text_line_height(title_font))) + m;
+  const int caption = static_cast<int>(std::ceil(text_line_height(font))) + 4;
   Canvas cv(4 * W + bar_extent, m + title_height + 2 * (H + caption));
   TextStyle ts;
   ts.align = Align::Centre;
   if (!options.title.empty()) {
-    ts.size = kTitleFontSize;
+    ts.size = title_font;
     ts.bold = true;
     cv.text(2.0 * W, m, options.title, ts);
   }
-  ts.size = kTickFontSize;
+  ts.size = font;
   ts.bold = false;
   const ColourTable table(colouring);
   const int top = m + title_height;
@@ -347,7 +348,7 @@ io::RgbImage render_standard_views(const std::vector<HemisphereSurface>& hemisph
     std::vector<double> zbuf;
     cv.image(rasterise_panel(meshes[i]->V, meshes[i]->F, meshes[i]->N, meshes[i]->colouring, table, cams[i], zbuf), x, y + caption);
   }
-  draw_colour_bar(cv, 4 * W, top + H / 4.0, 2 * H - H / 2.0, colouring, sat);
+  draw_colour_bar(cv, 4 * W, top + H / 4.0, 2 * H - H / 2.0, colouring, sat, font);
   return cv.to_image();
 }
 

@@ -274,8 +274,9 @@ void parameters_section(std::ostringstream& out, const ReportData& d) {
 
 }  // namespace
 
-std::string report_html(const ReportData& d) {
-  const ReportFigures figures = report_figures(d);
+std::string report_html(const ReportData& d) { return report_html(d, report_figures(d)); }
+
+std::string report_html(const ReportData& d, const ReportFigures& figures) {
   std::ostringstream out;
   page_head(out, d);
   header_section(out, d);
@@ -295,5 +296,9 @@ std::string report_html(const ReportData& d) {
 }
 
 void write_report(const std::string& path, const ReportData& data) { io::write_file_atomically(path, report_html(data)); }
+
+void write_report(const std::string& path, const ReportData& data, const ReportFigures& figures) {
+  io::write_file_atomically(path, report_html(data, figures));
+}
 
 }  // namespace authalic::analysis

@@ -62,6 +62,10 @@ std::vector<HemisphereSurface> view_surfaces(const ReportData& d, bool z) {
 
 void standard_view_figures(const ReportData& d, ReportFigures& f) {
   StandardViewsOptions o;
+  // Labels large enough to stay >= 11 px when the PDF shrinks the figure to the page width.
+  o.panel_width = 300;
+  o.panel_height = 230;
+  o.font_size = 22;
   const double threshold = d.normative.threshold;
   std::vector<HemisphereSurface> z = view_surfaces(d, true);
   bool any_z = false;
@@ -90,7 +94,8 @@ void square_map_figures(const ReportData& d, ReportFigures& f) {
   for (const ReportHemisphere& h : d.hemispheres) {
     if (h.flat_uv.rows() == 0 || h.faces.rows() == 0) continue;
     FlatRenderOptions fo;
-    fo.width = 430;
+    fo.width = 460;
+    fo.font_size = 18;
     fo.domain_width = h.domain_width;
     fo.domain_height = h.domain_height;
     fo.grid_cols = h.grid_cols;
@@ -137,7 +142,8 @@ void rectangle_figure(const ReportData& d, ReportFigures& f) {
     of += h.rectangle_faces.rows();
   }
   FlatRenderOptions fo;
-  fo.width = 880;
+  fo.width = 900;
+  fo.font_size = 18;
   fo.domain_width = 2.0;
   fo.grid_cols = 2 * rows;
   fo.grid_rows = rows;

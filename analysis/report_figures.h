@@ -31,6 +31,12 @@ ReportFigures report_figures(const ReportData& data);
 // vertex's element (NaN outside the elements); empty when there is none.
 VectorXd report_vertex_z(const ReportHemisphere& h);
 
+// The report from pictures drawn once (report_html / write_report / write_report_pdf of
+// analysis/report.h draw them themselves): the pipeline writes the HTML and the PDF from one set.
+std::string report_html(const ReportData& data, const ReportFigures& figures);
+void write_report(const std::string& path, const ReportData& data, const ReportFigures& figures);
+void write_report_pdf(const std::string& path, const ReportData& data, const ReportFigures& figures);
+
 // The HTML report's interactive section (analysis/report_viewer.cpp).
 void viewer_section(std::ostringstream& out, const ReportData& data);
 

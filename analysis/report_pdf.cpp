@@ -147,20 +147,21 @@ void second_page(Page& p, const ReportData& d, const ReportFigures& f) {
     table(p, {"lobe", "left: elements", "left: mean z", "right: elements", "right: mean z"}, lobe_rows(d), {0.2, 0.2, 0.2, 0.2, 0.2}, 10);
   }
   heading(p, "Flat maps");
-  // The square maps in one row (z and PET per hemisphere), then the rectangle across the page.
-  const double cell = p.width / 4;
+  // Two square maps side by side: z per hemisphere when compared, else PET (the HTML has them
+  // all, and the rectangle).
+  const bool z = d.normative.present;
+  const double cell = p.width / 2;
   int k = 0;
   double row_height = 0;
   for (const ReportFigure& fig : f.flat_maps) {
-    if (fig.image.width > 2 * fig.image.height || k == 4) continue;  // the rectangle, below
-    const double scale = std::min((cell - 4) / fig.image.width, 140.0 / fig.image.height);
+    const bool square = fig.alt.find("rectangle") == std::string::npos;
+    if (!square || k == 2 || (fig.alt.find("z-score") != std::string::npos) != z) continue;
+    const double scale = std::min((cell - 6) / fig.image.width, 200.0 / fig.image.height);
     p.cv.image(fig.image, p.left + k * cell, p.y, scale);
     row_height = std::max(row_height, fig.image.height * scale);
     ++k;
   }
   p.y += row_height + 4;
-  for (const ReportFigure& fig : f.flat_maps)
-    if (fig.image.width > 2 * fig.image.height) picture(p, fig.image, 120);
   heading(p, "Quality and processing");
   const double half = p.width / 2 - 8;
   const double a = key_values(p.cv, p.left, p.y, half, d.quality);
@@ -171,8 +172,9 @@ void second_page(Page& p, const ReportData& d, const ReportFigures& f) {
 
 }  // namespace
 
-void write_report_pdf(const std::string& path, const ReportData& d) {
-  const ReportFigures figures = report_figures(d);
+void write_report_pdf(const std::string& path, const ReportData& d) { write_report_pdf(path, d, report_figures(d)); }
+
+void write_report_pdf(const std::string& path, const ReportData& d, const ReportFigures& figures) {
   std::string bytes;
   {
     const auto cv = Canvas::pdf(&bytes, kPageWidth, kPageHeight);
