@@ -1,9 +1,10 @@
 #pragma once
 // The per-subject clinical report, as a nuclear-medicine physician reads and files it: one
-// self-contained HTML file (pictures embedded as base64 PNG, inline CSS, no external resource)
-// that opens offline in any browser, and a PDF of one or two A4 pages (analysis/report_pdf.cpp)
-// for the patient record. Both show, in order: header (subject, scan, reference), the findings
-// in one paragraph with the decision-support disclaimer, the eight standard 3D views of z and
+// self-contained HTML file (pictures embedded as base64 PNG, inline CSS, the Niivue 3D viewer
+// inlined with its data, analysis/report_viewer.cpp; no external resource) that opens offline,
+// and a PDF of two A4 pages (analysis/report_pdf.cpp) for the patient record. Both show, in
+// order: header (subject, scan, reference), the findings in one paragraph with the
+// decision-support disclaimer, the eight standard 3D views of z and
 // PET (NEUROSTAT/3D-SSP layout), the flat maps, the cluster and regional tables by anatomical
 // name, quality flags and processing parameters. The pipeline fills a ReportData; the pictures
 // come from analysis/report_figures.h. Nothing here reads the clock: same data, same bytes.
