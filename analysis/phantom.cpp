@@ -11,9 +11,11 @@
 #include <queue>
 #include <sstream>
 
+#include "analysis/synthetic_parcellation.h"
 #include "core/error.h"
 #include "core/version.h"
 #include "io/atomic_file.h"
+#include "io/freesurfer_annot.h"
 #include "io/surface_io.h"
 
 namespace fs = std::filesystem;
@@ -622,6 +624,8 @@ void write_hemisphere_files(const std::string& out, const Hemisphere& h, const P
   for (std::size_t i = 0; i < cortex.vertices.size(); ++i) cortex.positions.row(static_cast<int>(i)) = h.white.V.row(cortex.vertices[i]);
   cortex.values = VectorXd::Zero(static_cast<int>(cortex.vertices.size()));
   io::write_freesurfer_label(out + "/label/" + hemi + ".cortex.label", cortex);
+  // Region names for the report, as recon-all's label/?h.aparc.annot gives them.
+  io::write_freesurfer_annotation(out + "/label/" + hemi + ".aparc.annot", synthetic_parcellation(h));
 
   const std::vector<bool>& mask = h.left ? region.left_mask : region.right_mask;
   VectorXi lesion(h.white.num_vertices());

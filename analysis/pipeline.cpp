@@ -19,7 +19,10 @@
 #include "analysis/elements.h"
 #include "analysis/normative.h"
 #include "analysis/render.h"
+#include "analysis/regions.h"
 #include "analysis/report.h"
+#include "analysis/report_figures.h"
+#include "analysis/report_inputs.h"
 #include "analysis/sampling.h"
 #include "core/authalic_flow.h"
 #include "core/conformal_map.h"
@@ -32,6 +35,7 @@
 #include "io/atomic_file.h"
 #include "io/checksum.h"
 #include "io/file_roles.h"
+#include "io/freesurfer_annot.h"
 #include "io/image_io.h"
 #include "io/lock_file.h"
 #include "io/registration.h"
@@ -95,6 +99,7 @@ struct Hemisphere {
   SamplingResult sampling;
   VectorXd pet;                 // per surface vertex (normalised)
   ElementResult elements;
+  Parcellation regions;         // anatomical names for the report
 };
 
 void check_id(const std::string& id) {
@@ -190,6 +195,7 @@ SubjectInputs inputs_from_subjects_dir(const std::string& subjects_dir, const st
   for (char c : subject)
     if (std::isalnum(static_cast<unsigned char>(c))) id += c;
   in.id = id;
+  default_annotations(in);  // label/?h.aparc.annot when recon-all made it
   return in;
 }
 
@@ -329,11 +335,183 @@ void remove_dead_staging(const std::string& out_dir, const std::string& id) {
 
 }  // namespace
 
+namespace {
+
+// The report's header rows: subject and scan (flags win over the PET's BIDS sidecar).
+KeyValues subject_rows(const SubjectInputs& in) {
+  const ScanDetails scan = scan_details_from_sidecar(in.pet);
+  auto either = [](const std::string& a, const std::string& b) { return !a.empty() ? a : !b.empty() ? b : "not given"; };
+  return {{"age", in.age > 0 ? human_number(in.age) + " years" : "unknown"},
+          {"sex", in.sex.empty() ? "unknown" : in.sex == "F" ? "female" : in.sex == "M" ? "male" : "other"},
+          {"scan date", either(in.scan_date, scan.scan_date)},
+          {"tracer", either(in.tracer, scan.tracer)},
+          {"injected dose", either(in.dose, scan.dose)},
+          {"PET", fs::path(in.pet).filename().string() + (scan.sidecar.empty() ? "" : " (BIDS sidecar read)")}};
+}
+
+// Quality flags: each map's acceptance numbers, the PET's coverage, the registration.
+KeyValues quality_rows(const Hemisphere (&hemis)[2], const RunOptions& options, const std::string& registration) {
+  KeyValues q;
+  for (const Hemisphere& h : hemis) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "%d flipped triangles, element-area CV %.4f (accepted: 0 and <= 0.01)", h.metrics.flips,
+                  h.metrics.element_cv);
+    q.emplace_back(h.name + " square map", buf);
+  }
+  for (const Hemisphere& h : hemis) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "%.1f %% of the cortex's vertices outside the PET's field of view%s",
+                  100.0 * h.sampling.outside_fraction, h.sampling.outside_fraction > 0.01 ? " (check the scan's coverage)" : "");
+    q.emplace_back(h.name + " PET coverage", buf);
+  }
+  q.emplace_back("registration", registration.empty() ? "none: the PET was taken as registered to the surfaces (no --t1)" : registration);
+  return q;
+}
+
+// One hemisphere's pictures and values for the report.
+ReportHemisphere report_hemisphere(const Hemisphere& h, int K, const std::vector<double>& z, const HemisphereRectangles& rect) {
+  ReportHemisphere rh;
+  rh.name = h.name;
+  rh.left = h.left;
+  rh.flat_uv = h.map.UV;
+  rh.faces = h.map.F;
+  rh.grid_cols = rh.grid_rows = K;
+  rh.surface_V = h.pial.mesh.V;
+  rh.surface_F = h.pial.mesh.F;
+  rh.shading = sulcal_shading(h.pial.mesh.V, h.pial.mesh.F);
+  rh.element_of_vertex = h.elements.vertex_element;
+  // Per map vertex: the surface's values, NaN for vertices the map inserted (drawn gray).
+  rh.pet = VectorXd::Constant(h.map.UV.rows(), std::numeric_limits<double>::quiet_NaN());
+  rh.pet.head(h.white.mesh.num_vertices()) = h.pet.head(h.white.mesh.num_vertices());
+  rh.element_pet = block_values(h.elements.block);
+  rh.element_z = z;
+  const RectanglePart& part = h.left ? rect.left : rect.right;
+  rh.rectangle_uv = part.UV;
+  rh.rectangle_faces = part.F;
+  rh.distortion = {{"flipped triangles", std::to_string(h.metrics.flips)},
+                   {"element-area CV (K=" + std::to_string(K) + ")", format_fixed(h.metrics.element_cv, 4)},
+                   {"per-face mean |ln area ratio|", format_fixed(h.metrics.face_ln_area.mean, 4)}};
+  return rh;
+}
+
+// Clusters named by region (majority of their vertices; the peak element's region), the
+// regional table and the findings sentence.
+void name_findings(ReportData& rd, const Hemisphere (&hemis)[2], const Comparison& cmp, int K) {
+  std::vector<std::vector<int>> vertices[2];
+  for (int b = 0; b < 2; ++b) {
+    vertices[b] = vertices_of_elements(hemis[b].elements.vertex_element, K * K);
+    const std::vector<double> z(cmp.z.begin() + b * K * K, cmp.z.begin() + (b + 1) * K * K);
+    for (const RegionRow& r : regional_table(hemis[b].name, hemis[b].regions, z, vertices[b]))
+      rd.regions.push_back({r.hemisphere, r.lobe, r.region, r.elements, r.mean_z});
+  }
+  std::vector<Finding> findings;
+  for (const ElementCluster& c : cmp.clusters) {
+    ReportCluster r;
+    r.id = c.id;
+    r.hemisphere = c.hemisphere;
+    r.sign = c.sign < 0 ? "hypo" : "hyper";
+    r.num_elements = static_cast<int>(c.elements.size());
+    r.area_mm2 = c.area_mm2;
+    r.peak_z = c.peak_z;
+    r.mean_z = c.mean_z;
+    r.peak_row = c.peak_row;
+    r.peak_col = c.peak_col;
+    for (int i = 0; i < 3; ++i) r.peak_ras[i] = c.peak_ras[i];
+    const int b = std::clamp(c.block, 0, 1);
+    std::vector<int> members;
+    for (int e : c.elements) members.insert(members.end(), vertices[b][e].begin(), vertices[b][e].end());
+    const RegionShare share = majority_region(hemis[b].regions, members);
+    r.region = share.name;
+    r.region_fraction = share.fraction;
+    if (c.peak_element >= 0) r.peak_region = majority_region(hemis[b].regions, vertices[b][c.peak_element]).name;
+    findings.push_back({r.sign, r.hemisphere, r.region.empty() ? "cortex" : r.region, r.peak_z, r.area_mm2});
+    rd.clusters.push_back(r);
+  }
+  rd.region_method = hemis[0].regions.method;
+  rd.summary = findings_summary(findings, rd.normative.threshold, rd.normative.min_cluster_elements);
+}
+
+ReportNormative report_normative(const NormativeReference& reference, const SubjectInputs& in, const RunOptions& options,
+                                 const Comparison& cmp) {
+  ReportNormative n;
+  n.present = true;
+  n.num_subjects = static_cast<int>(reference.subjects.size());
+  double lo = 1e300, hi = -1e300;
+  for (const NormativeSubject& s : reference.subjects)
+    if (std::isfinite(s.age)) {
+      lo = std::min(lo, s.age);
+      hi = std::max(hi, s.age);
+    }
+  if (hi >= lo) n.age_range = human_number(lo) + "-" + human_number(hi) + " years" + (cmp.age_adjusted ? " (z age adjusted)" : "");
+  n.normalisation = reference.normalisation;
+  n.domain = "square, K = " + std::to_string(reference.grid.k);
+  n.correspondence = "element by element on the authalic square (the same K x K grid in every subject)";
+  n.description = fs::path(in.normative).filename().string() + ", built by " + reference.software;
+  n.threshold = options.z_threshold;
+  n.min_cluster_elements = options.min_cluster_elements;
+  if (cmp.rescaled) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "x %.4f, fitted on the %d elements with |z| < %.1f", cmp.scale, cmp.scale_elements,
+                  options.z_threshold);
+    n.rescale = buf;
+  } else {
+    n.rescale = "none";
+  }
+  return n;
+}
+
+ReportData report_data(const SubjectInputs& in, const RunOptions& options, const Hemisphere (&hemis)[2],
+                       const HemisphereRectangles& rect, const ElementTable& table, const Comparison* cmp,
+                       const NormativeReference& reference, const json& params, const RunSummary& summary,
+                       const std::string& registration) {
+  ReportData rd;
+  rd.subject_id = in.id;
+  rd.software = software_version();
+  rd.pet_units = table.units;
+  rd.subject_info = subject_rows(in);
+  for (const std::string& w : summary.warnings) rd.notes.push_back("Warning: " + w + ".");
+  for (const auto& [k, v] : params.items()) rd.parameters.emplace_back(k, v.is_string() ? v.get<std::string>() : v.dump());
+  rd.parameters.emplace_back("minimum cluster size", std::to_string(options.min_cluster_elements) + " elements");
+  rd.quality = quality_rows(hemis, options, registration);
+  const int K = options.k;
+  for (int b = 0; b < 2; ++b) {
+    std::vector<double> z;
+    if (cmp) z.assign(cmp->z.begin() + b * K * K, cmp->z.begin() + (b + 1) * K * K);
+    rd.hemispheres.push_back(report_hemisphere(hemis[b], K, z, rect));
+  }
+  if (cmp) {
+    rd.normative = report_normative(reference, in, options, *cmp);
+    name_findings(rd, hemis, *cmp, K);
+  } else {
+    rd.notes.push_back("No normative reference was given (--normative): PET only, no z-scores.");
+  }
+  return rd;
+}
+
+// The hemisphere's regions: its annotation when given, else lobes from coordinates.
+Parcellation hemisphere_regions(const Hemisphere& h, const std::string& annot) {
+  if (annot.empty()) return lobes_from_coordinates(h.white.mesh.V, h.cortex_faces);
+  return parcellation_from_annotation(io::read_freesurfer_annotation(annot, h.white.mesh.num_vertices()),
+                                      fs::path(annot).filename().string());
+}
+
+}  // namespace
+
+void default_annotations(SubjectInputs& in) {
+  auto beside = [](const std::string& cortex, const char* name) {
+    if (cortex.empty()) return std::string();
+    const fs::path p = fs::path(cortex).parent_path() / name;
+    return fs::is_regular_file(p) ? p.string() : std::string();
+  };
+  if (in.lh_annot.empty()) in.lh_annot = beside(in.lh_cortex, "lh.aparc.annot");
+  if (in.rh_annot.empty()) in.rh_annot = beside(in.rh_cortex, "rh.aparc.annot");
+}
+
 RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const ProgressFn& progress) {
   check_id(in.id);
   if (options.out_dir.empty()) throw InputError("--out: no output folder given");
   const fs::path final_dir = fs::path(options.out_dir) / ("sub-" + in.id);
-  io::check_inputs_outside({in.lh_white, in.lh_pial, in.rh_white, in.rh_pial, in.lh_cortex, in.rh_cortex, in.pet, in.t1, in.normative},
+  io::check_inputs_outside({in.lh_white, in.lh_pial, in.rh_white, in.rh_pial, in.lh_cortex, in.rh_cortex, in.pet, in.t1, in.normative, in.lh_annot, in.rh_annot},
                            final_dir.string(), options.force ? "--force would replace" : "is the subject's output folder");
   const OutFolder out_folder(options.out_dir);
   // The whole run holds the subject's lock: a second run on the same OUT/sub-<id> is refused
@@ -360,6 +538,8 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   for (const std::string& note : {left_note, right_note})
     if (!note.empty()) log.note(note);
   check_anatomy(hemis, in);
+  hemis[0].regions = hemisphere_regions(hemis[0], in.lh_annot);
+  hemis[1].regions = hemisphere_regions(hemis[1], in.rh_annot);
   io::VolumeReadOptions pet_options;
   pet_options.frame = options.pet_frame;
   pet_options.sum_frames = options.pet_sum_frames;
@@ -418,6 +598,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   // With a T1, the PET is first registered to it (rigid, Mattes MI): surfaces are in the T1's
   // scanner RAS, so they reach the PET's world coordinates through the registration.
   Eigen::Matrix4d t1_to_pet = Eigen::Matrix4d::Identity();
+  std::string registration;  // for the report's quality flags
   if (!in.t1.empty()) {
     const io::RigidRegistration reg = io::register_rigid(io::read_volume(in.t1), pet);
     t1_to_pet = reg.t1_to_pet;
@@ -425,6 +606,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     m << "PET registered to the T1 (ITK v4 rigid, Mattes MI " << reg.metric << ", " << reg.iterations
       << " iterations); T1 RAS -> PET RAS translation " << t1_to_pet.block<3, 1>(0, 3).transpose() << " mm";
     log.note(m.str());
+    registration = m.str();
   }
   for (Hemisphere& h : hemis) {
     const MatrixXd Vw = transform_points(t1_to_pet * h.pial.to_scanner, h.pial.mesh.V);
@@ -481,6 +663,9 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     co.threshold = options.z_threshold;
     co.rescale = options.rescale;
     cmp = compare_to_reference(reference, table, co);
+    const int dropped = drop_small_clusters(cmp, options.min_cluster_elements);
+    if (dropped > 0)
+      log.note(std::to_string(dropped) + " clusters of fewer than " + std::to_string(options.min_cluster_elements) + " elements not reported");
     for (const std::string& n : cmp.notes) log.note(n);
     // z silently not age adjusted would read as adjusted (issue 15: up to 1.2 in z at 75 years).
     if (reference.age_model && !cmp.age_adjusted)
@@ -641,75 +826,18 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   io::write_workbench_spec((stage / spec_name).string(), spec);
   summary.files.push_back(spec_name);
 
-  if (options.report) {
-    ReportData rd;
-    rd.subject_id = in.id;
-    rd.software = software_version();
-    rd.pet_units = table.units;
-    char age[32] = "unknown";
-    if (in.age > 0) std::snprintf(age, sizeof(age), "%g", in.age);
-    rd.subject_info = {{"PET", fs::path(in.pet).filename().string()}, {"age", age},
-                       {"sex", in.sex.empty() ? "unknown" : in.sex == "F" ? "female" : in.sex == "M" ? "male" : "other"}};
-    for (const std::string& w : summary.warnings) rd.notes.push_back("Warning: " + w + ".");
-    for (const auto& [k, v] : params.items()) rd.parameters.emplace_back(k, v.is_string() ? v.get<std::string>() : v.dump());
-    for (int b = 0; b < 2; ++b) {
-      Hemisphere& h = hemis[b];
-      ReportHemisphere rh;
-      rh.name = h.name;
-      rh.left = h.left;
-      rh.flat_uv = h.map.UV;
-      rh.faces = h.map.F;
-      rh.grid_cols = rh.grid_rows = K;
-      rh.surface_V = h.pial.mesh.V;
-      rh.surface_F = h.pial.mesh.F;
-      rh.element_of_vertex = h.elements.vertex_element;
-      // Per map vertex: the surface's values, NaN for vertices the map inserted (drawn gray).
-      rh.pet = VectorXd::Constant(h.map.UV.rows(), std::numeric_limits<double>::quiet_NaN());
-      rh.pet.head(h.white.mesh.num_vertices()) = h.pet.head(h.white.mesh.num_vertices());
-      rh.element_pet = block_values(h.elements.block);
-      if (compare) rh.element_z.assign(cmp.z.begin() + b * table.grid.num_elements(), cmp.z.begin() + (b + 1) * table.grid.num_elements());
-      rh.distortion = {{"flipped triangles", std::to_string(h.metrics.flips)},
-                       {"element-area CV (K=" + std::to_string(K) + ")", std::to_string(h.metrics.element_cv)},
-                       {"per-face mean |ln area ratio|", std::to_string(h.metrics.face_ln_area.mean)}};
-      rd.hemispheres.push_back(std::move(rh));
-    }
-    if (compare) {
-      rd.normative.present = true;
-      rd.normative.num_subjects = static_cast<int>(reference.subjects.size());
-      rd.normative.normalisation = reference.normalisation;
-      rd.normative.domain = "square, K = " + std::to_string(reference.grid.k);
-      rd.normative.description = fs::path(in.normative).filename().string() + " (" + reference.software + ")";
-      rd.normative.threshold = options.z_threshold;
-      if (cmp.rescaled) {
-        char buf[160];
-        std::snprintf(buf, sizeof(buf), "x %.4f, fitted on the %d elements with |z| < %.1f", cmp.scale,
-                      cmp.scale_elements, options.z_threshold);
-        rd.normative.rescale = buf;
-      } else {
-        rd.normative.rescale = "none";
-      }
-      for (const ElementCluster& c : cmp.clusters) {
-        ReportCluster r;
-        r.id = c.id;
-        r.hemisphere = c.hemisphere;
-        r.sign = c.sign < 0 ? "hypo" : "hyper";
-        r.num_elements = static_cast<int>(c.elements.size());
-        r.area_mm2 = c.area_mm2;
-        r.peak_z = c.peak_z;
-        r.mean_z = c.mean_z;
-        r.peak_row = c.peak_row;
-        r.peak_col = c.peak_col;
-        for (int i = 0; i < 3; ++i) r.peak_ras[i] = c.peak_ras[i];
-        rd.clusters.push_back(r);
-      }
-    } else {
-      rd.notes.push_back("No normative reference was given (--normative): PET only, no z-scores.");
-    }
-    write_report((stage / names.report()).string(), rd);
-    summary.files.push_back(names.report());
-  }
   for (const auto& [base, j] : sidecars) io::write_file_atomically((stage / (base + ".json")).string(), j.dump(2) + "\n");
   log.end(summary);
+  if (options.report) {
+    log.begin("report (HTML and PDF)");
+    const ReportData rd = report_data(in, options, hemis, rect, table, compare ? &cmp : nullptr, reference, params, summary, registration);
+    const ReportFigures figures = report_figures(rd);  // drawn once for both
+    write_report((stage / names.report()).string(), rd, figures);
+    write_report_pdf((stage / names.report_pdf()).string(), rd, figures);
+    summary.files.push_back(names.report());
+    summary.files.push_back(names.report_pdf());
+    log.end(summary);
+  }
   io::write_file_atomically((stage / names.log()).string(), software_version() + "\nsubject sub-" + in.id + "\n" + log.text());
   summary.files.push_back(names.log());
 

@@ -24,7 +24,14 @@ struct SubjectInputs {
   std::string normative;                             // optional reference (authalic normative build)
   double age = 0;                                    // years, 0 = unknown
   std::string sex;                                   // "F", "M", "O" or empty (unknown)
+  std::string lh_annot, rh_annot;                    // optional FreeSurfer ?h.aparc.annot: names regions in the report
+  // Scan details for the report header (empty: from the PET's BIDS sidecar JSON when present).
+  std::string scan_date, tracer, dose;
 };
+
+// FreeSurfer's label/?h.aparc.annot beside the cortex labels (the subject's label/ folder), when
+// present and not given explicitly.
+void default_annotations(SubjectInputs& inputs);
 
 // FreeSurfer subject folder -> inputs: surf/?h.white, surf/?h.pial, label/?h.cortex.label;
 // the surfaces' footers carry c_ras (tkregister RAS -> scanner RAS). Throws InputError naming the
@@ -53,6 +60,7 @@ struct SubjectFiles {
   std::string clusters() const { return folder() + "_clusters.tsv"; }
   std::string workbench_spec() const { return folder() + "_workbench.spec"; }
   std::string report() const { return folder() + "_report.html"; }
+  std::string report_pdf() const { return folder() + "_report.pdf"; }
   std::string log() const { return folder() + "_log.txt"; }
 
  private:
@@ -67,7 +75,11 @@ struct RunOptions {
   std::string normalize = "global";  // "none", "global", or a NIfTI mask path (reference region)
   double z_threshold = 2.0;     // |z| flagged as abnormal
   bool rescale = true;          // CompareOptions::rescale
-  bool report = true;           // write sub-<id>_report.html
+  bool report = true;           // write sub-<id>_report.html and sub-<id>_report.pdf
+  // Clusters with fewer elements are not reported (at K = 32 one element is ~0.1 % of a
+  // hemisphere's cortex; 3 elements, ~90-270 mm^2, keeps the isolated single-element flags that
+  // chance alone produces out of the report).
+  int min_cluster_elements = 3;
   bool rectangle = true;        // also the 2:1 whole-brain rectangle map
   bool require_age = false;     // refuse a reference with an age model when the age is unknown
   int pet_frame = -1;           // 4D PET: the frame to sample (0-based); -1: none chosen

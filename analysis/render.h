@@ -1,18 +1,18 @@
 #pragma once
-// Pictures without a display: flat maps, sphere and 3D surface views are rasterised in software
-// straight into an RgbImage (io::write_png writes it). No VTK rendering, no X server. Labels use
-// a built-in 5x7 bitmap font (analysis/font.cpp); the drawing order is fixed, so the same input
-// gives the same bytes.
+// Pictures without a display, as io::RgbImage (io::write_png writes them). Text, frames, grids,
+// colour bars, histograms and layout are drawn with Cairo (analysis/canvas.h); the data layers
+// (a scalar interpolated across each triangle, then mapped through the colour map) and the 3D
+// views are scan-converted here (analysis/render_surface.cpp says why the 3D part is ours). The
+// drawing order is fixed, so the same input gives the same bytes.
 #include <array>
 #include <string>
 #include <vector>
 
+#include "analysis/canvas.h"
 #include "core/mesh.h"
 #include "io/image_io.h"
 
 namespace authalic::analysis {
-
-using Rgb = std::array<unsigned char, 3>;
 
 // Colour maps from their published control points, linear in between: "gray" (sulcal shading),
 // "viridis" (sequential, PET; van der Walt & Smith's matplotlib table, 17 of its 256 entries),
@@ -27,6 +27,11 @@ struct ScalarColouring {
   std::string colormap = "viridis";
   Rgb nan_colour{200, 200, 200};
   std::string label;              // colour-bar label with units, e.g. "SUVR" or "z"
+  // Thresholded display (3D-SSP): values with |value| < threshold are not coloured; 0 = off.
+  double threshold = 0.0;
+  // Per vertex gray level in [0,1] shown where a value is not coloured (NaN or under the
+  // threshold): sulcal shading. Empty: nan_colour.
+  VectorXd background;
 };
 
 struct FlatRenderOptions {
@@ -35,6 +40,7 @@ struct FlatRenderOptions {
   int grid_cols = 0, grid_rows = 0;  // element grid lines drawn when > 0
   bool draw_colour_bar = true;
   std::string title;
+  double font_size = 13.0;         // labels, px (the title is 16/13 of it)
 };
 // Where render_flat / render_element_grid put the domain: the pixel rectangle
 // [left, left + plot_width) x [top, top + plot_height) of an image width x height. Domain x maps
@@ -43,7 +49,6 @@ struct FlatRenderOptions {
 struct FlatLayout {
   int width = 0, height = 0;
   int left = 0, top = 0, plot_width = 0, plot_height = 0;
-  int text_scale = 1;  // font scale of labels (5x7 glyphs times this)
 };
 FlatLayout flat_layout(const FlatRenderOptions& options, const ScalarColouring& colouring);
 
@@ -94,6 +99,32 @@ io::RgbImage render_surface_views(const MatrixXd& V, const MatrixXi& F, const Sc
 // left out and counted in the panel's caption (n, mean, median).
 io::RgbImage render_histograms(const std::vector<std::vector<double>>& series, const std::vector<std::string>& titles,
                                int bins, int width, int height);
+
+// The eight standard views of NEUROSTAT/3D-SSP (Minoshima et al. 1995) in one figure, laid out
+// as 3D-SSP does: right lateral, left lateral, superior, inferior (top row); anterior,
+// posterior, right medial, left medial (bottom row). Lateral and medial views show one
+// hemisphere, the others both; one scale (mm per pixel) for all panels; one colour bar.
+struct HemisphereSurface {
+  MatrixXd V;          // RAS mm
+  MatrixXi F;
+  bool left = true;
+  VectorXd values;     // per vertex, coloured through the figure's ScalarColouring
+  VectorXd background; // per vertex gray level (sulcal shading), may be empty
+};
+struct StandardViewsOptions {
+  int panel_width = 280, panel_height = 220;
+  std::string title;
+  double font_size = 13.0;  // captions and colour-bar labels, px (the title is 16/13 of it)
+};
+// colouring: range, map, threshold and label (its values/background are ignored: each
+// hemisphere brings its own).
+io::RgbImage render_standard_views(const std::vector<HemisphereSurface>& hemispheres, const ScalarColouring& colouring,
+                                   const StandardViewsOptions& options);
+
+// Per vertex sulcal shading for HemisphereSurface::background: the depth of each vertex below
+// (dark) or above (light) a heavily smoothed copy of the surface along its normal, the idea of
+// FreeSurfer's "sulc", mapped to gray levels in [0.45, 0.8] over its 2nd-98th percentiles.
+VectorXd sulcal_shading(const MatrixXd& V, const MatrixXi& F);
 
 // Images side by side (top-aligned) with `gap` pixels between them, and an optional caption
 // under each (empty = none); the background fills the rest.

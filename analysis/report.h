@@ -1,8 +1,13 @@
 #pragma once
-// The per-subject HTML report: one self-contained file (pictures embedded as base64 PNG, inline
-// CSS, no script, no external resource) that opens offline in any browser. The pipeline fills a
-// ReportData with what it computed; this module draws the pictures (analysis/render.h) and writes
-// the page. Nothing here depends on the clock, so the same data give the same bytes.
+// The per-subject clinical report, as a nuclear-medicine physician reads and files it: one
+// self-contained HTML file (pictures embedded as base64 PNG, inline CSS, the Niivue 3D viewer
+// inlined with its data, analysis/report_viewer.cpp; no external resource) that opens offline,
+// and a PDF of two A4 pages (analysis/report_pdf.cpp) for the patient record. Both show, in
+// order: header (subject, scan, reference), the findings in one paragraph with the
+// decision-support disclaimer, the eight standard 3D views of z and
+// PET (NEUROSTAT/3D-SSP layout), the flat maps, the cluster and regional tables by anatomical
+// name, quality flags and processing parameters. The pipeline fills a ReportData; the pictures
+// come from analysis/report_figures.h. Nothing here reads the clock: same data, same bytes.
 #include <string>
 #include <utility>
 #include <vector>
@@ -25,6 +30,16 @@ struct ReportCluster {
   double mean_z = 0.0;
   int peak_row = -1, peak_col = -1;  // element of the peak (row 0 = bottom of the domain)
   double peak_ras[3] = {0, 0, 0};    // scanner RAS mm of that element's centroid
+  std::string region;            // majority region of its vertices ("" = unnamed)
+  double region_fraction = 0.0;  // share of its labelled vertices in `region`
+  std::string peak_region;       // region of the peak element
+};
+
+// A row of the regional table: a lobe (region empty) or a region within it.
+struct ReportRegion {
+  std::string hemisphere, lobe, region;
+  int elements = 0;
+  double mean_z = 0.0;
 };
 
 struct ReportHemisphere {
@@ -44,6 +59,10 @@ struct ReportHemisphere {
   VectorXd z;                    // per vertex z-score; empty = take element_z through element_of_vertex
   std::vector<double> element_pet, element_z;  // rows x cols, row 0 at the bottom; may be empty
   KeyValues distortion;          // e.g. {"flipped triangles", "0"}, {"element-area CV (K=32)", "0.006"}
+  VectorXd shading;              // per surface_V vertex gray level (sulcal shading); empty = plain
+  // The 2:1 whole-brain rectangle part of this hemisphere (UV in [0,2] x [0,1]), may be empty.
+  MatrixXd rectangle_uv;
+  MatrixXi rectangle_faces;
 };
 
 struct ReportNormative {
@@ -54,6 +73,9 @@ struct ReportNormative {
   std::string description;       // free text: what the reference is, its file, its software version
   double threshold = 2.0;        // |z| flagged
   std::string rescale;           // the patient's rescaling to the reference (CompareOptions::rescale), "" = not shown
+  std::string age_range;         // e.g. "55-78 years"
+  std::string correspondence;    // how patient and controls correspond, e.g. "the same K x K square elements"
+  int min_cluster_elements = 1;  // clusters smaller than this are not reported
 };
 
 struct ReportData {
@@ -65,9 +87,19 @@ struct ReportData {
   std::vector<ReportHemisphere> hemispheres;
   ReportNormative normative;
   std::vector<ReportCluster> clusters;
+  std::vector<ReportRegion> regions;  // regional table (both hemispheres)
+  std::string region_method;     // how regions were named (stated under the tables)
+  KeyValues quality;             // quality flags: map acceptance, registration, PET coverage
+  std::string summary;           // the findings in words (one paragraph)
   std::vector<std::string> notes;  // warnings or remarks shown at the top
   std::string software;          // e.g. "authalic 0.1.0 (abc1234)"
 };
+
+// Shown on every report: what the numbers are and are not.
+extern const char* const kReportDisclaimer;
+// The reference described in rows (n, age range, normalisation, elements, correspondence, file
+// and software), for the header of both the HTML and the PDF.
+KeyValues reference_rows(const ReportNormative& normative);
 
 // The page as a string (UTF-8 HTML5, well-formed: every element closed, void elements written
 // as <img ... />). Section ids: subject, parameters, flat-maps, surface-views, clusters,
@@ -75,6 +107,8 @@ struct ReportData {
 std::string report_html(const ReportData& data);
 // Writes report_html(data) atomically.
 void write_report(const std::string& path, const ReportData& data);
+// The same report as a PDF of A4 pages (Cairo PDF surface), written atomically.
+void write_report_pdf(const std::string& path, const ReportData& data);
 
 // Helpers, public for tests and other pages.
 std::string html_escape(const std::string& text);

@@ -38,6 +38,12 @@ int run(RunArgs& a) {
     in.normative = a.inputs.normative;
     in.age = a.inputs.age;
     in.t1 = a.inputs.t1;
+    in.sex = a.inputs.sex;
+    in.scan_date = a.inputs.scan_date;
+    in.tracer = a.inputs.tracer;
+    in.dose = a.inputs.dose;
+    if (!a.inputs.lh_annot.empty()) in.lh_annot = a.inputs.lh_annot;
+    if (!a.inputs.rh_annot.empty()) in.rh_annot = a.inputs.rh_annot;
   } else {
     const std::pair<const char*, const std::string*> need[] = {
         {"--lh-white", &in.lh_white}, {"--lh-pial", &in.lh_pial},     {"--rh-white", &in.rh_white},
@@ -46,6 +52,7 @@ int run(RunArgs& a) {
       if (value->empty())
         throw InputError(std::string(flag) + " is missing; give all six surface/label inputs, or --subjects-dir and --subject");
   }
+  analysis::default_annotations(in);
   if (in.pet.empty()) throw InputError("--pet is missing; give the subject's PET (NIfTI, MGH/MGZ or a DICOM folder)");
   analysis::RunSummary s;
   try {
@@ -92,7 +99,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
       "run",
       "Per-subject pipeline: load and check inputs -> authalic square map per hemisphere -> PET by normal projection "
       "(inward from the pial surface) -> equal-area elements -> z-scores against a normative reference (if given) "
-      "-> report. Writes OUT/sub-<id>/ (BIDS-derivative names, a JSON sidecar per file, the white and pial surfaces in scanner RAS, a Workbench spec sub-<id>_workbench.spec, sub-<id>_report.html, sub-<id>_log.txt); "
+      "-> report. Writes OUT/sub-<id>/ (BIDS-derivative names, a JSON sidecar per file, the white and pial surfaces in scanner RAS, a Workbench spec sub-<id>_workbench.spec, sub-<id>_report.html and .pdf, sub-<id>_log.txt); "
       "the folder appears only when complete. Surfaces in tkregister RAS (FreeSurfer) are moved to scanner RAS "
       "with their footer's c_ras. Exit codes: 0 ok, 2 bad input, 3 processing failure.");
   auto& in = a->inputs;
@@ -114,6 +121,16 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_flag("--sum-frames", a->options.pet_sum_frames, "4D PET: sum all frames (a static image from dynamic frames)");
   sub->add_option("--age", in.age, "Age in years (used by references with an age model)")->check(age_years());
   sub->add_option("--sex", in.sex, "Sex, recorded in the report and the sidecars: F, M or O (female, male, other)")->transform(sex_letter());
+  sub->add_option("--lh-annot", in.lh_annot,
+                  "Left FreeSurfer annotation naming regions in the report (default: lh.aparc.annot beside --lh-cortex, e.g. the "
+                  "subject's label/ folder; without one, lobes from coordinates)");
+  sub->add_option("--rh-annot", in.rh_annot, "Right FreeSurfer annotation (default: rh.aparc.annot beside --rh-cortex)");
+  sub->add_option("--scan-date", in.scan_date, "Scan date for the report header, e.g. 2024-03-18 (default: the PET's BIDS sidecar)");
+  sub->add_option("--tracer", in.tracer, "Tracer for the report header, e.g. [18F]FDG (default: TracerName in the PET's BIDS sidecar)");
+  sub->add_option("--dose", in.dose, "Injected dose for the report header, e.g. '205 MBq' (default: the PET's BIDS sidecar)");
+  sub->add_option("--min-cluster", a->options.min_cluster_elements,
+                  "Smallest cluster of abnormal elements reported, in elements (default 3)")
+      ->check(in_range(1, 100000));
   sub->add_option("--out", a->options.out_dir, "Output folder; the subject goes to OUT/sub-<id>")->required();
   sub->add_flag("--force", a->options.force, "Replace an existing OUT/sub-<id>");
   add_k_option(*sub, a->options.k, {DomainKind::Square}, 2, 512);
@@ -125,7 +142,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_flag("--no-rescale", [a](std::int64_t) { a->options.rescale = false; },
                 "Compare the globally normalised values as they are, without rescaling the subject to the reference "
                 "over its normal elements (see `authalic normative compare --help`)");
-  sub->add_flag("--no-report", [a](std::int64_t) { a->options.report = false; }, "Skip sub-<id>_report.html");
+  sub->add_flag("--no-report", [a](std::int64_t) { a->options.report = false; }, "Skip sub-<id>_report.html and sub-<id>_report.pdf");
   sub->add_flag("--no-rectangle", [a](std::int64_t) { a->options.rectangle = false; },
                 "Skip the whole-brain 2:1 rectangle map (sub-<id>_hemi-?_space-authalicrect_flat.surf.gii)");
   add_common_options(*sub);

@@ -12,6 +12,8 @@ PACKAGES=(
   clang libclang-rt-14-dev libomp-dev      # libFuzzer targets (scripts/fuzz.sh), ThreadSanitizer
   connectome-workbench                     # wb_command: reference values for the sampling tests
   chromium                                 # headless screenshot of the HTML report (test)
+  libcairo2-dev fonts-dejavu-core          # every picture and the PDF report (Cairo, DejaVu Sans)
+  poppler-utils                            # pdftoppm/pdfinfo: the PDF report's test and bench
   snakemake                                # workflow/Snakefile (cohorts beyond one machine; tested)
 )
 export DEBIAN_FRONTEND=noninteractive
@@ -25,3 +27,11 @@ if [ ${#missing[@]} -gt 0 ]; then
   $SUDO apt-get -o DPkg::Lock::Timeout=600 install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 echo "install_deps: all ${#PACKAGES[@]} packages present" >&2
+# The report's interactive 3D viewer (Niivue, BSD-2), pinned by version and integrity checksum in
+# report_assets/package-lock.json; its dist/niivue.umd.js is inlined into every HTML report.
+if command -v npm >/dev/null 2>&1; then
+  (cd "$(dirname "$0")/../report_assets" && npm ci --ignore-scripts --no-audit --no-fund --loglevel=error)
+  echo "install_deps: report_assets/node_modules/@niivue/niivue installed" >&2
+else
+  echo "install_deps: npm not found: reports are written without the interactive 3D view (install nodejs and npm, then rerun)" >&2
+fi

@@ -36,6 +36,7 @@ trap 'rm -rf "$profile" "$tmp_png"' EXIT
 # Offline and deterministic: no network services, no GPU, a throw-away profile.
 if ! timeout 120 "$browser" --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
   --disable-background-networking --disable-component-update --disable-sync --disable-extensions \
+  --use-gl=angle --use-angle=swiftshader --enable-unsafe-swiftshader --virtual-time-budget=15000 \
   --hide-scrollbars --user-data-dir="$profile" --window-size="$width,$height" \
   --screenshot="$tmp_png" "file://$abs_report" >"$profile/chromium.log" 2>&1; then
   echo "$0: chromium failed:" >&2

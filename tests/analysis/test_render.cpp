@@ -5,7 +5,6 @@
 #include <cmath>
 #include <filesystem>
 
-#include "analysis/raster.h"
 #include "analysis/render.h"
 #include "common/test_data.h"
 #include "core/error.h"
@@ -19,7 +18,6 @@ using authalic::VectorXi;
 using authalic::analysis::Rgb;
 using authalic::io::RgbImage;
 namespace an = authalic::analysis;
-namespace raster = authalic::analysis::raster;
 
 Rgb pixel(const RgbImage& img, int x, int y) {
   const auto* p = img.pixel(x, y);
@@ -383,6 +381,46 @@ TEST(RenderSurfaceViews, PanelsSideBySideAndDeterministic) {
   EXPECT_EQ(a.rgb, b.rgb);
 }
 
+TEST(RenderStandardViews, EightPanelsThresholdedOverGreyAndOneScale) {
+  // Two planar "hemispheres" facing +-x; only the left one has |z| above the threshold, on its
+  // anterior half.
+  an::HemisphereSurface left, right;
+  plane_grid(21, &left.V, &left.F);
+  right.V = left.V;
+  left.V.col(0).array() -= 30.0;
+  right.V.col(0).array() += 30.0;
+  right.left = false;
+  left.values = (left.V.col(1).array() > 0).cast<double>() * -3.0;
+  right.values = VectorXd::Zero(right.V.rows());
+  left.background = right.background = VectorXd::Constant(left.V.rows(), 0.5);
+  an::ScalarColouring c;
+  c.colormap = "coolwarm";
+  c.vmin = -5;
+  c.vmax = 5;
+  c.threshold = 2;
+  c.label = "z";
+  an::StandardViewsOptions o;
+  const RgbImage img = an::render_standard_views({left, right}, c, o);
+  EXPECT_GT(img.width, 4 * o.panel_width);
+  EXPECT_GT(img.height, 2 * o.panel_height);
+  auto coloured = [&](int x0, int x1, int y0, int y1) {
+    long n = 0;
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const Rgb p = pixel(img, x, y);
+        n += p[2] > p[0] + 40;  // blue, not grey
+      }
+    return n;
+  };
+  const int W = o.panel_width, half = img.height / 2;
+  EXPECT_EQ(coloured(0, W, 0, half), 0) << "right lateral shows only the right hemisphere (all below threshold)";
+  EXPECT_GT(coloured(W, 2 * W, 0, half), 1000) << "left lateral shows the left hemisphere's abnormal half";
+  // Grey below the threshold: r = g = b (sulcal shading), in the right lateral panel.
+  EXPECT_EQ(pixel(img, W / 2, half / 2)[0], pixel(img, W / 2, half / 2)[2]);
+  // The colour bar marks the threshold band in grey and the ends.
+  EXPECT_THROW(an::render_standard_views({}, c, o), std::invalid_argument);
+}
+
 TEST(RenderHistograms, BarHeightsFollowTheCounts) {
   std::vector<double> s(40, 0.0);
   for (int i = 10; i < 40; ++i) s[i] = 1.0;  // 10 zeros, 30 ones
@@ -416,38 +454,51 @@ TEST(RenderHistograms, OnePanelPerSeries) {
   EXPECT_THROW(an::render_histograms({}, {}, 10, 100, 100), std::invalid_argument);
 }
 
-TEST(Raster, FontGlyphsAndText) {
-  // '1' and 'A' rows as drawn; unknown code points fall back to '?'.
-  EXPECT_EQ(raster::glyph(U'A')[3], 0b11111);
-  EXPECT_EQ(raster::glyph(U'1')[6], 0b01110);
-  EXPECT_EQ(raster::glyph(0x4E00), raster::glyph(U'?'));
-  EXPECT_EQ(raster::glyph(0x039B)[0], 0b00100);  // Λ
-  const auto cps = raster::decode_utf8("aΛ²");
-  ASSERT_EQ(cps.size(), 3u);
-  EXPECT_EQ(cps[1], 0x039Bu);
-  EXPECT_EQ(cps[2], 0x00B2u);
-  EXPECT_EQ(raster::text_width("abc", 2), (3 * 6 - 1) * 2);
-  RgbImage img(20, 10, 255);
-  raster::draw_text(img, 1, 1, "I", {0, 0, 0}, 1);
-  // 'I' = .###. / ..#.. x5 / .###.
-  EXPECT_EQ(pixel(img, 2, 1), (Rgb{0, 0, 0}));
-  EXPECT_EQ(pixel(img, 1, 1), (Rgb{255, 255, 255}));
-  EXPECT_EQ(pixel(img, 3, 4), (Rgb{0, 0, 0}));
-  EXPECT_EQ(pixel(img, 2, 4), (Rgb{255, 255, 255}));
-  EXPECT_EQ(count_colour(img, {0, 0, 0}), 3 + 5 + 3);
+TEST(Canvas, TextIsDrawnInARealFontAndMeasured) {
+  // DejaVu Sans through Cairo: wider text measures wider, a 13 px line is about 15 px tall, and
+  // the glyphs are anti-aliased (gray levels between ink and paper).
+  EXPECT_GT(an::text_width("WWW", 13), an::text_width("iii", 13));
+  EXPECT_NEAR(an::text_width("abc", 26), 2 * an::text_width("abc", 13), 1.0);
+  EXPECT_GT(an::text_line_height(13), 13.0);
+  EXPECT_LT(an::text_line_height(13), 18.0);
+  an::Canvas cv(80, 30);
+  an::TextStyle ts;
+  ts.size = 20;
+  cv.text(4, 2, "Hg", ts);
+  const RgbImage img = cv.to_image();
+  long ink = 0, grey = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const int v = pixel(img, x, y)[0];
+      ink += v < 60;
+      grey += v >= 60 && v < 200;
+    }
+  EXPECT_GT(ink, 40);
+  EXPECT_GT(grey, 10);
+  // Word wrap keeps every line within the width.
+  for (const auto& line : an::wrap_text("Hypometabolism in left precuneus and posterior cingulate, peak z -4.9", 13, 150))
+    EXPECT_LE(an::text_width(line, 13), 150.0) << line;
+}
+
+TEST(Canvas, NumbersForPeople) {
+  EXPECT_EQ(an::format_fixed(61.8, 1), "61.8");
+  EXPECT_EQ(an::format_fixed(-0.04, 1), "0.0");
+  EXPECT_EQ(an::format_fixed(-4.94, 1, true), "\u22124.9");
+  EXPECT_EQ(an::format_fixed(std::nan(""), 1), "n/a");
 }
 
 TEST(Raster, NiceTicks) {
   double step = 0;
-  const auto t = raster::nice_ticks(0, 1, 5, &step);
+  const auto t = an::nice_ticks(0, 1, 5, &step);
   ASSERT_EQ(t.size(), 6u);
   EXPECT_DOUBLE_EQ(step, 0.2);
-  EXPECT_EQ(raster::format_tick(t[2], step), "0.4");
-  const auto z = raster::nice_ticks(-3, 3, 5, &step);
+  EXPECT_EQ(an::format_tick(t[2], step), "0.4");
+  const auto z = an::nice_ticks(-3, 3, 5, &step);
   EXPECT_DOUBLE_EQ(step, 2.0);
   EXPECT_EQ(z, (std::vector<double>{-2, 0, 2}));
-  EXPECT_EQ(raster::format_tick(0.25, 0.25), "0.25");
-  EXPECT_EQ(raster::format_tick(1500, 500), "1500");
+  EXPECT_EQ(an::format_tick(-2, step), "\u22122");  // a typeset minus
+  EXPECT_EQ(an::format_tick(0.25, 0.25), "0.25");
+  EXPECT_EQ(an::format_tick(1500, 500), "1500");
 }
 
 TEST(RenderPng, RoundTripsThroughWriteAndRead) {

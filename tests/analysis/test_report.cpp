@@ -178,10 +178,18 @@ an::ReportData example_report(bool normative) {
     c.mean_z = -3.5;
     c.peak_row = 3;
     c.peak_col = 4;
+    c.region = "precuneus";
+    c.region_fraction = 0.8;
+    c.peak_region = "precuneus";
     d.clusters = {c, c};
     d.clusters[1].id = 2;
     d.clusters[1].hemisphere = "right";
+    d.regions = {{"left", "parietal", "", 12, -1.25}, {"left", "parietal", "precuneus", 5, -2.5}};
+    d.summary = "Hypometabolism in left precuneus and right precuneus (2 clusters, 500 mm2), peak z -3.5 in left precuneus.";
+    d.region_method = "test parcellation";
   }
+  d.subject_info.push_back({"tracer", "[18F]FDG"});
+  d.quality = {{"left square map", "0 flipped triangles"}};
   return d;
 }
 
@@ -214,14 +222,24 @@ TEST(Report, WellFormedSelfContainedWithAllSections) {
   EXPECT_EQ(page.tag_count["head"], 1);
   EXPECT_EQ(page.tag_count["body"], 1);
   EXPECT_EQ(page.tag_count["title"], 1);
-  for (const char* id : {"subject", "parameters", "flat-maps", "surface-views", "clusters", "normative", "distortion"}) {
+  for (const char* id : {"subject", "summary", "parameters", "flat-maps", "surface-views", "clusters", "regions", "normative",
+                         "distortion"}) {
     EXPECT_TRUE(page.ids.count(id)) << "missing section " << id;
   }
-  // Nothing is fetched from elsewhere.
-  EXPECT_EQ(html.find("http://"), std::string::npos);
-  EXPECT_EQ(html.find("https://"), std::string::npos);
-  EXPECT_EQ(page.tag_count["script"], 0);
+  // The findings in words come before the pictures, with the disclaimer.
+  EXPECT_LT(html.find("Hypometabolism in left precuneus"), html.find("id=\"surface-views\""));
+  EXPECT_NE(html.find("Decision support, not a diagnosis"), std::string::npos);
+  // Clusters and the regional table name regions for people.
+  EXPECT_NE(html.find("<td>precuneus <span class=\"muted\">(80&#8201;%)</span></td>"), std::string::npos);
+  EXPECT_NE(html.find("<strong>parietal</strong>"), std::string::npos);
+  EXPECT_NE(html.find("\u22122.50"), std::string::npos);  // mean z, typeset minus
+  EXPECT_NE(html.find("tracer</th><td>[18F]FDG"), std::string::npos);
+  // Nothing is fetched from elsewhere: no link, no script or image by src, no url() in the CSS
+  // (the inlined viewer's code mentions web pages in its comments; it loads nothing).
+  for (const char* remote : {"src=\"http", "href=\"http", "url(http", "<script src", "import("})
+    EXPECT_EQ(html.find(remote), std::string::npos) << remote;
   EXPECT_EQ(page.tag_count["link"], 0);
+  EXPECT_LE(page.tag_count["script"], 3);  // the viewer: its data, the Niivue bundle and the scene, all inline
   // Text is escaped.
   EXPECT_NE(html.find("sub-&lt;01&gt;&amp;"), std::string::npos);
   EXPECT_EQ(html.find("sub-<01>"), std::string::npos);
@@ -238,8 +256,8 @@ TEST(Report, EmbeddedImagesDecodeAsPng) {
   const std::string html = an::report_html(example_report(true));
   ParsedPage page = parse_page(html);
   ASSERT_TRUE(page.ok) << page.error;
-  // Per hemisphere: PET flat map, z flat map, PET element image; plus one 3D view each.
-  EXPECT_EQ(page.images.size(), 8u);
+  // The eight standard views of z and of PET; per hemisphere the z and PET flat maps.
+  EXPECT_EQ(page.images.size(), 6u);
   const std::string dir = authalic::test::temp_dir("report_images");
   int k = 0;
   for (const auto& img : page.images) {
@@ -266,8 +284,8 @@ TEST(Report, WithoutNormativeSaysSoAndShowsPet) {
   ParsedPage page = parse_page(html);
   ASSERT_TRUE(page.ok) << page.error;
   EXPECT_NE(html.find("No normative reference was given"), std::string::npos);
-  EXPECT_EQ(page.images.size(), 6u);  // PET flat + PET elements + 3D (PET) per hemisphere
-  for (const char* id : {"subject", "parameters", "flat-maps", "surface-views", "clusters", "normative", "distortion"}) {
+  EXPECT_EQ(page.images.size(), 3u);  // the standard views of PET, the PET flat map per hemisphere
+  for (const char* id : {"subject", "summary", "parameters", "flat-maps", "surface-views", "clusters", "normative", "distortion"}) {
     EXPECT_TRUE(page.ids.count(id)) << "missing section " << id;
   }
 }
@@ -282,6 +300,74 @@ TEST(Report, DeterministicAndWrittenAtomically) {
   std::ostringstream s;
   s << f.rdbuf();
   EXPECT_EQ(s.str(), a);
+}
+
+// The PDF as poppler renders it: two A4 pages, neither blank, the z views' blue on page 1.
+TEST(ReportPdf, TwoA4PagesThatPopplerRenders) {
+  if (authalic::test::run_command("command -v pdftoppm") != 0) {
+    if (authalic::test::running_in_ci()) FAIL() << "CI=true but pdftoppm (poppler-utils) is not installed";
+    GTEST_SKIP() << "pdftoppm not installed";
+  }
+  const std::string dir = authalic::test::temp_dir("report_pdf");
+  an::ReportData d = example_report(true);
+  for (auto& h : d.hemispheres) h.element_z.assign(64, -4.0);  // everything abnormal: blue views
+  an::write_report_pdf(dir + "/report.pdf", d);
+  std::string out;
+  ASSERT_EQ(authalic::test::run_command("pdfinfo " + dir + "/report.pdf", &out), 0) << out;
+  const std::size_t pages = out.find("Pages:");
+  ASSERT_NE(pages, std::string::npos) << out;
+  EXPECT_EQ(std::stoi(out.substr(pages + 6)), 2) << out;
+  EXPECT_NE(out.find("595.28 x 841.89 pts (A4)"), std::string::npos) << out;
+  ASSERT_EQ(authalic::test::run_command("pdftoppm -r 50 -png " + dir + "/report.pdf " + dir + "/page", &out), 0) << out;
+  for (const char* name : {"/page-1.png", "/page-2.png"}) {
+    const io::RgbImage page = io::read_png(dir + name);
+    EXPECT_NEAR(page.width, 595.28 * 50 / 72, 1.5);
+    EXPECT_NEAR(page.height, 841.89 * 50 / 72, 1.5);
+    long ink = 0, blue = 0;
+    for (int y = 0; y < page.height; ++y)
+      for (int x = 0; x < page.width; ++x) {
+        const auto* p = page.pixel(x, y);
+        ink += p[0] < 128 && p[1] < 128 && p[2] < 128;
+        blue += p[2] > 150 && p[0] < 110 && p[1] < 130;
+      }
+    EXPECT_GT(ink, 500) << name << " is blank";
+    if (std::string(name) == "/page-1.png") {
+      EXPECT_GT(blue, 2000) << "no z view on page 1";
+    }
+  }
+  // Same data, same bytes (no creation date).
+  an::write_report_pdf(dir + "/again.pdf", d);
+  EXPECT_EQ(authalic::test::run_command("cmp " + dir + "/report.pdf " + dir + "/again.pdf"), 0);
+}
+
+// The interactive view as headless Chromium runs it, offline (WebGL2 through SwiftShader): the
+// page's script reads the canvas back in the frame it drew and records how many pixels are not
+// background; the static pictures are in the same page.
+TEST(ReportViewer, ChromiumDrawsTheInteractiveViewOffline) {
+  if (authalic::test::run_command("command -v chromium") != 0) {
+    if (authalic::test::running_in_ci()) FAIL() << "CI=true but chromium is not installed";
+    GTEST_SKIP() << "chromium not installed";
+  }
+  const std::string html_text = an::report_html(example_report(true));
+  if (html_text.find("id=\"nv-canvas\"") == std::string::npos) {
+    if (authalic::test::running_in_ci()) FAIL() << "CI=true but the Niivue bundle is not installed (scripts/install_deps.sh)";
+    GTEST_SKIP() << "Niivue not installed (report_assets/node_modules)";
+  }
+  ASSERT_LT(html_text.size(), 8u * 1000 * 1000);
+  const std::string dir = authalic::test::temp_dir("report_viewer");
+  an::write_report(dir + "/report.html", example_report(true));
+  std::string dom;
+  ASSERT_EQ(authalic::test::run_command("timeout 120 chromium --headless --no-sandbox --disable-gpu --use-gl=angle "
+                                        "--use-angle=swiftshader --enable-unsafe-swiftshader --disable-background-networking "
+                                        "--user-data-dir=" + dir + "/profile --virtual-time-budget=15000 --dump-dom file://" +
+                                            dir + "/report.html 2>/dev/null",
+                                        &dom),
+            0);
+  const std::size_t at = dom.find("data-drawn=\"");
+  ASSERT_NE(at, std::string::npos) << dom.substr(dom.find("nv-status"), 300);
+  EXPECT_GT(std::stol(dom.substr(at + 12)), 1000) << "the canvas is blank";
+  ParsedPage page = parse_page(html_text);
+  EXPECT_EQ(page.images.size(), 6u) << "the static pictures are there too";
 }
 
 TEST(Report, RobustRangeIgnoresOutliersAndNan) {

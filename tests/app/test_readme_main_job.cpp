@@ -73,6 +73,10 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   EXPECT_NE(html.str().find("<html"), std::string::npos);
   EXPECT_NE(html.str().find("data:image/png;base64,"), std::string::npos) << "pictures are embedded";
   EXPECT_NE(html.str().find("id=\"clusters\""), std::string::npos) << "the sample run compares with the reference";
+  // Issue 16: clusters named by region (the sample's generated aparc.annot beside the cortex
+  // labels), the findings in words, and the PDF beside the HTML.
+  EXPECT_NE(html.str().find("Hypometabolism in left precuneus"), std::string::npos) << "the sample's clusters are named by region";
+  EXPECT_TRUE(fs::exists(report.parent_path() / ("sub-" + id[1].str() + "_report.pdf")));
 
   // Provenance (issue 15 items 5 and 9): the output folder is a BIDS derivative dataset, and each
   // sidecar records the command line as run and the inputs by the path given, with checksums.

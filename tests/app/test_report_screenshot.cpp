@@ -46,8 +46,8 @@ an::ReportData screenshot_report() {
     }
   }
   h.grid_cols = h.grid_rows = 16;
-  // z strongly negative everywhere: the coolwarm blue end must dominate the pictures.
-  h.z = authalic::VectorXd::Constant(n * n, -4.0);
+  // z beyond the colour range everywhere: the coolwarm blue end must dominate the pictures.
+  h.z = authalic::VectorXd::Constant(n * n, -6.0);
   h.pet = h.flat_uv.col(0);
   d.hemispheres.push_back(h);
   d.normative.present = true;
