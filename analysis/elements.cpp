@@ -196,6 +196,11 @@ bool same_part(const ElementGrid& grid, int c1, int c2) {
   return left(c1) == left(c2);
 }
 
+std::string table_correspondence(const ElementTable& table) {
+  const auto it = table.metadata.find("correspondence");
+  return it == table.metadata.end() ? kPerSubjectCorrespondence : it->second;
+}
+
 std::string hemisphere_of(const std::map<std::string, std::string>& metadata, const std::string& path) {
   const auto it = metadata.find("AnatomicalStructurePrimary");
   if (it != metadata.end()) {

@@ -47,6 +47,11 @@ struct SquareMapOptions {
   // See RectangleBoundaryMap::flip_dividing_edges: true keeps the input's vertex list when every
   // dividing edge can be flipped (all fsaverage5 and fs741 regions measured); false splits them all.
   bool flip_dividing_edges = true;
+  // Optional starting map (#V x 2 in [0, W] x [0, 1] for the region's vertices; e.g. an atlas map
+  // carried through a sphere registration, core/atlas_map.h): the boundary follows it instead of
+  // arc length and the anchor, the interior starts at it (no stretch-energy start), and the flow
+  // makes it authalic. UV_initial is then this start.
+  MatrixXd start_uv;
 };
 
 struct SquareMapResult {
@@ -64,6 +69,7 @@ struct SquareMapResult {
   ConformalMapResult initial;  // split counts, weights used (V/F/UV moved into the fields above)
   StretchEnergyReport stretch;
   FlowReport flow;
+  int start_repaired = 0;    // with start_uv: vertices re-placed to unfold the start
   int flips = 0;             // flipped or degenerate faces of UV (0 unless something failed)
   double seconds_initial = 0;  // wall time of the conformal initial map
   double seconds_flow = 0;     // wall time of the flow (passes, repair, polish)
