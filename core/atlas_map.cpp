@@ -212,15 +212,37 @@ std::vector<double> boundary_perimeter_from_map(const MatrixXd& UV, const Matrix
     throw ProcessingError("atlas start: the subject's cortex boundary winds " + std::to_string(winding / P) +
                           " times around the atlas square, not once counter-clockwise; check that the atlas and the "
                           "sphere.reg belong to this hemisphere");
-  // Monotone: backward or zero steps raised to a small share, then the loop rescaled to P.
-  const double floor_step = 0.02 * P / static_cast<double>(nb);
-  double total = 0;
-  for (double& d : step) total += (d = std::max(d, floor_step));
-  std::vector<double> out(static_cast<std::size_t>(num_vertices), std::numeric_limits<double>::quiet_NaN());
-  double acc = s[0];
+  // Monotone: the unwrapped coordinates' increasing least-squares fit (pool adjacent violators), so
+  // a backward excursion (a stretch of the subject's boundary inside the atlas cortex that projects
+  // onto the sides out of order) is averaged where it occurs instead of shifting the rest of the
+  // loop; then a small strictly increasing margin so no two boundary vertices coincide.
+  std::vector<double> u(nb);
+  u[0] = s[0];
+  for (std::size_t i = 1; i < nb; ++i) u[i] = u[i - 1] + step[i - 1];
+  std::vector<double> level;
+  std::vector<std::size_t> count;
   for (std::size_t i = 0; i < nb; ++i) {
-    out[static_cast<std::size_t>(loop[i])] = std::fmod(acc, P);
-    acc += step[i] * P / total;
+    level.push_back(u[i]);
+    count.push_back(1);
+    while (level.size() > 1 && level[level.size() - 2] >= level.back()) {
+      const std::size_t k = level.size() - 1;
+      level[k - 1] = (level[k - 1] * count[k - 1] + level[k] * count[k]) / static_cast<double>(count[k - 1] + count[k]);
+      count[k - 1] += count[k];
+      level.pop_back();
+      count.pop_back();
+    }
+  }
+  std::size_t i = 0;
+  for (std::size_t b = 0; b < level.size(); ++b)
+    for (std::size_t c = 0; c < count[b]; ++c) u[i++] = level[b];
+  const double eps = 0.02 * P / static_cast<double>(nb);
+  for (std::size_t k = 1; k < nb; ++k) u[k] = std::max(u[k], u[k - 1] + eps);
+  // The loop closes at u[0] + P: squeeze the whole loop if the margins pushed its end beyond.
+  const double span = u[nb - 1] - u[0], room = P - eps;
+  std::vector<double> out(static_cast<std::size_t>(num_vertices), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t k = 0; k < nb; ++k) {
+    const double x = span > room ? u[0] + (u[k] - u[0]) * room / span : u[k];
+    out[static_cast<std::size_t>(loop[k])] = std::fmod(std::fmod(x, P) + P, P);
   }
   return out;
 }

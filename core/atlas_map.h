@@ -72,8 +72,9 @@ AtlasTransfer transfer_atlas_map(const MatrixXd& atlas_S, const MatrixXi& atlas_
 // Perimeter coordinates (core/conformal_map.h, rectangle_perimeter_point) for the boundary loop of
 // the disk F (walked as conformal_rectangle_map walks it) that follow a starting map UV (#V x 2):
 // each boundary vertex takes the perimeter coordinate of the rectangle-boundary point nearest to its
-// UV; steps that go backwards (or stand still) along the loop are raised to 2 % of the loop's mean
-// step and the whole loop rescaled to the perimeter, so the coordinates increase once around it.
+// UV; where they go backwards along the loop they are replaced by their increasing least-squares
+// fit (pool adjacent violators) and kept 2 % of the loop's mean step apart, so the coordinates
+// increase once around it.
 // Returns #V values (NaN off the boundary). Throws ProcessingError when UV's boundary does not wind
 // once counter-clockwise around the rectangle (e.g. an atlas of the other hemisphere).
 std::vector<double> boundary_perimeter_from_map(const MatrixXd& UV, const MatrixXi& F, int num_vertices, double width);
