@@ -689,6 +689,36 @@ void write_variant_subject(const std::string& dir, const Hemisphere& left, const
   }
 }
 
+// A subject's PET with its own anatomy: the variant's files written (write_variant_subject), the
+// healthy template and the lesion (empty: none) carried by its warp, then its effects.
+io::Volume variant_subject_pet(const std::string& dir, const Hemisphere& left, const VariabilityTemplate& t,
+                               const PlantedRegion& region, const PhantomOptions& options, PhantomRng& rng,
+                               const io::Volume& healthy, const SubjectEffects& effects, const std::vector<float>& lesion,
+                               double reference) {
+  const AnatomyWarp warp = draw_anatomy_warp(rng, options.area_change, options.deformation_wavelength_mm, options.fold_change);
+  write_variant_subject(dir, left, t, region, warp);
+  io::Volume column = healthy;
+  column.data = lesion;
+  return subject_pet(deform_volume(healthy, warp), effects, lesion.empty() ? lesion : deform_volume(column, warp).data,
+                     reference);
+}
+
+// cohort.csv: the shared anatomy in surf/ and label/, or (variability) each subject's own with its sphere.reg.
+std::string cohort_csv_text(const std::vector<PhantomSubject>& subjects, bool variability) {
+  std::ostringstream csv;
+  csv << "subject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex"
+      << (variability ? ",lh_sphere_reg,rh_sphere_reg\n" : "\n");
+  for (const auto& s : subjects) {
+    const std::string d = variability ? "sub-" + s.id + "/" : "";
+    csv << s.id << ',' << s.role << ',' << csv_number(s.age) << ',' << s.pet << ',' << d << "surf/lh.white," << d
+        << "surf/lh.pial," << d << "surf/rh.white," << d << "surf/rh.pial," << d << "label/lh.cortex.label," << d
+        << "label/rh.cortex.label";
+    if (variability) csv << ',' << d << "surf/lh.sphere.reg," << d << "surf/rh.sphere.reg";
+    csv << '\n';
+  }
+  return csv.str();
+}
+
 }  // namespace
 
 PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& options, const ProgressFn& progress) {
@@ -772,18 +802,11 @@ PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& op
     subj.pet = "sub-" + subj.id + "/sub-" + subj.id + "_pet.nii.gz";
     report(progress, "phantom", 0.05 + 0.95 * s / total, subj.id);
     fs::create_directories(out + "/sub-" + subj.id, ec);
-    io::Volume pet;
-    if (options.anatomical_variability) {  // the subject's anatomy, PET and lesion carried by its own warp
-      const AnatomyWarp warp = draw_anatomy_warp(anatomy_rng, options.area_change, options.deformation_wavelength_mm,
-                                                 options.fold_change);
-      write_variant_subject(out + "/sub-" + subj.id, left, variability, result.region, warp);
-      io::Volume lesion = healthy;
-      lesion.data = multiplier;
-      pet = subject_pet(deform_volume(healthy, warp), subj.effects,
-                        patient ? deform_volume(lesion, warp).data : std::vector<float>{}, reference);
-    } else {
-      pet = subject_pet(healthy, subj.effects, patient ? multiplier : std::vector<float>{}, reference);
-    }
+    const std::vector<float> lesion = patient ? multiplier : std::vector<float>{};
+    const io::Volume pet = options.anatomical_variability
+                               ? variant_subject_pet(out + "/sub-" + subj.id, left, variability, result.region, options,
+                                                     anatomy_rng, healthy, subj.effects, lesion, reference)
+                               : subject_pet(healthy, subj.effects, lesion, reference);
     if (ec) throw InputError(out + "/sub-" + subj.id + ": cannot create the folder (" + ec.message() + ")");
     io::write_nifti(out + "/" + subj.pet, pet,
                     "authalic phantom " + subj.role + (patient ? " (planted -" + csv_number(100 * options.region_depth) + "%)" : ""));
@@ -792,16 +815,7 @@ PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& op
 
   // Cohort table, region description, generator record.
   std::ostringstream csv;
-  csv << "subject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex"
-      << (options.anatomical_variability ? ",lh_sphere_reg,rh_sphere_reg\n" : "\n");
-  for (const auto& s : result.subjects) {
-    const std::string d = options.anatomical_variability ? "sub-" + s.id + "/" : "";
-    csv << s.id << ',' << s.role << ',' << csv_number(s.age) << ',' << s.pet << ',' << d << "surf/lh.white," << d
-        << "surf/lh.pial," << d << "surf/rh.white," << d << "surf/rh.pial," << d << "label/lh.cortex.label," << d
-        << "label/rh.cortex.label";
-    if (options.anatomical_variability) csv << ',' << d << "surf/lh.sphere.reg," << d << "surf/rh.sphere.reg";
-    csv << '\n';
-  }
+  csv << cohort_csv_text(result.subjects, options.anatomical_variability);
   result.cohort_csv = out + "/cohort.csv";
   io::write_file_atomically(result.cohort_csv, csv.str());
 
