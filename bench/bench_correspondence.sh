@@ -87,6 +87,9 @@ for name, d in (("per-subject", own), ("atlas", atl)):
           f"{np.median(res[:, 1]):.2f} elements (worst subject {res[:, 1].max():.2f})"
           + ("   [required: >= 90 % for every subject: " + ("PASS" if share.min() >= 90 else "FAIL") + "]" if name == "atlas" else ""))
 
+own_cv = [json.load(open(os.path.join(own, f"sub-{s}", f"sub-{s}_hemi-{h}_space-authalic_flat.json")))["metrics"]["element_area_cv"]
+          for s in subjects for h in "LR"]
+print(f"per-subject-mode maps ({len(own_cv)}): element CV median {np.median(own_cv):.4f}, max {max(own_cv):.4f} (for comparison)")
 cvs, flips = [], []
 for s in subjects:
     for h in "LR":
@@ -104,7 +107,7 @@ fractions = []
 for s in controls:
     ref = os.path.join(val, f"loo-{s}.json")
     sh("normative", "build", ref, *[table(c) for c in controls if c != s], "--quiet")
-    j = json.loads(sh("normative", "compare", ref, table(s), os.path.join(val, f"loo-{s}"), "--json", "--quiet"))
+    j = json.loads(sh("normative", "compare", ref, table(s), os.path.join(val, f"cmp-{s}"), "--json", "--quiet"))
     fractions.append((j["counts"]["hypo"] + j["counts"]["hyper"]) / j["counts"]["compared"])
 f = 100 * np.array(fractions)
 n_ref = len(controls) - 1
@@ -121,7 +124,7 @@ for p in patients:
         sh("elements", os.path.join(ph, f"sub-{p}", "surf", f"{fs}.white"),
            os.path.join(atl, f"sub-{p}", f"sub-{p}_hemi-{hemi}_space-authalic_flat.surf.gii"),
            os.path.join(ph, f"sub-{p}", "truth", f"{fs}.lesion.label.gii"), out, "--k", str(K), "--quiet")
-        for e in csv.DictReader(open(out + ".csv")):
+        for e in csv.DictReader(open(out + ".tsv"), delimiter="\t"):
             t, zz = float(e["value"]), z[int(e["col"]), int(e["row"]), b]
             if t >= 1 - 1e-9:
                 inside += 1; found += zz <= -2
