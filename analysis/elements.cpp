@@ -174,6 +174,11 @@ double parse_seam(const std::string& text, const std::string& what) {
   return x;
 }
 
+std::string table_correspondence(const ElementTable& table) {
+  const auto it = table.metadata.find("correspondence");
+  return it == table.metadata.end() ? kPerSubjectCorrespondence : it->second;
+}
+
 std::string hemisphere_of(const std::map<std::string, std::string>& metadata, const std::string& path) {
   const auto it = metadata.find("AnatomicalStructurePrimary");
   if (it != metadata.end()) {

@@ -105,6 +105,11 @@ struct ElementResult {
 ElementResult compute_elements(const ElementMap& map, const ElementGrid& grid,
                                const Eigen::Matrix4d& to_scanner = Eigen::Matrix4d::Identity());
 
+// The element correspondence mode of a table: its metadata "correspondence" ("per-subject" or
+// "atlas <identity>", analysis/atlas.h); tables written before issue 14 are per-subject.
+inline constexpr const char* kPerSubjectCorrespondence = "per-subject";
+std::string table_correspondence(const ElementTable& table);
+
 // "left", "right" or "unknown" for a surface: GIFTI AnatomicalStructurePrimary (CortexLeft/Right),
 // else the file name (lh.* / rh.*, *left* / *right*, hemi-L / hemi-R).
 std::string hemisphere_of(const std::map<std::string, std::string>& metadata, const std::string& path);

@@ -36,11 +36,12 @@ struct Shape {
   ElementGrid grid;
   std::vector<std::string> hemispheres;
   std::string normalisation, units;
+  std::string correspondence;  // "per-subject" or "atlas <identity>" (analysis/atlas.h)
 };
 
-Shape shape_of(const NormativeReference& r) { return {r.grid, r.hemispheres, r.normalisation, r.units}; }
+Shape shape_of(const NormativeReference& r) { return {r.grid, r.hemispheres, r.normalisation, r.units, r.correspondence}; }
 Shape shape_of(const ElementTable& t) {
-  Shape s{t.grid, {}, t.normalisation, t.units};
+  Shape s{t.grid, {}, t.normalisation, t.units, table_correspondence(t)};
   for (const auto& b : t.blocks) s.hemispheres.push_back(b.hemisphere);
   return s;
 }
@@ -56,6 +57,12 @@ void check_shapes(const Shape& ref, const Shape& other, const std::string& what,
   if (ref.hemispheres != other.hemispheres) refuse("the hemisphere list", join(ref.hemispheres), join(other.hemispheres));
   if (ref.normalisation != other.normalisation) refuse("the intensity normalisation", ref.normalisation, other.normalisation);
   if (ref.units != other.units) refuse("the units", "'" + ref.units + "'", "'" + other.units + "'");
+  // Element (i, j) means other anatomy in another correspondence mode or atlas (issue 14).
+  if (ref.correspondence != other.correspondence)
+    throw InputError(what + ": the element correspondence is '" + other.correspondence + "' but " + ref_name + " has '" +
+                     ref.correspondence + "'; element (i, j) covers different anatomy in another mode or atlas: map the "
+                     "subject in the reference's mode (run/flatten with or without --atlas and sphere.reg) or use a "
+                     "reference built in this one");
 }
 
 void check_new_subject(const NormativeReference& r, const std::string& id, const std::string& what) {
@@ -101,6 +108,7 @@ NormativeReference empty_reference_like(const ElementTable& table) {
   for (const auto& b : table.blocks) r.hemispheres.push_back(b.hemisphere);
   r.normalisation = table.normalisation;
   r.units = table.units;
+  r.correspondence = table_correspondence(table);
   r.software = software_version();
   const std::size_t size = static_cast<std::size_t>(r.num_values());
   r.n.assign(size, 0.0);
@@ -255,6 +263,7 @@ std::string reference_to_json(const NormativeReference& r) {
   j["hemispheres"] = r.hemispheres;
   j["normalisation"] = r.normalisation;
   j["units"] = r.units;
+  j["correspondence"] = r.correspondence;
   j["num_subjects"] = r.subjects.size();
   j["age_model"] = r.age_model;
   j["partial"] = r.partial;
@@ -296,6 +305,7 @@ NormativeReference reference_from_json(const std::string& text, const std::strin
     r.normalisation = j.at("normalisation").get<std::string>();
     r.units = j.at("units").get<std::string>();
     r.software = j.value("software", "");
+    r.correspondence = j.value("correspondence", std::string(kPerSubjectCorrespondence));
     for (const auto& s : j.at("subjects")) {
       NormativeSubject sub;
       sub.id = s.value("id", "");

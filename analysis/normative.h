@@ -27,7 +27,7 @@
 // File format (JSON, versioned; see reference_to_json for every field):
 //   {"format": "authalic-normative-reference", "version": 1, "software": "authalic 0.1.0 (rev)",
 //    "domain": "square", "k": 32, "rows": 32, "cols": 32, "hemispheres": ["left", "right"],
-//    "normalisation": "global", "units": "...", "num_subjects": N, "age_model": true,
+//    "normalisation": "global", "units": "...", "correspondence": "per-subject" | "atlas <id>", "num_subjects": N, "age_model": true,
 //    "subjects": [{"id": "...", "age": 61.0 | null, "table": "path"}],
 //    "elements": {"n": [...], "mean": [...], "m2": [...], "age_mean": [...], "age_m2": [...],
 //                 "age_value_comoment": [...], "sd": [...]}}
@@ -63,6 +63,9 @@ struct NormativeReference {
   std::string normalisation = "none";
   std::string units;
   std::string software;                  // of the program that wrote it
+  // How elements correspond across its subjects: "per-subject" or "atlas <identity>" (issue 14,
+  // analysis/atlas.h); a patient table must match (check_compatible). Files without it: per-subject.
+  std::string correspondence = kPerSubjectCorrespondence;
   std::vector<NormativeSubject> subjects;
   bool age_model = false;                // age statistics kept (every subject has an age)
   bool partial = false;                  // built for merging (normative build --partial): not for comparing

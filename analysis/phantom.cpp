@@ -7,11 +7,15 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <queue>
 #include <sstream>
 
+#include "analysis/atlas.h"
+#include "analysis/phantom_anatomy.h"
 #include "analysis/synthetic_parcellation.h"
+#include "core/atlas_map.h"
 #include "core/error.h"
 #include "core/version.h"
 #include "io/atomic_file.h"
@@ -637,6 +641,88 @@ void write_hemisphere_files(const std::string& out, const Hemisphere& h, const P
   io::write_label_gifti(out + "/truth/" + hemi + ".lesion.label.gii", lesion, {{0, "healthy"}, {1, "planted_region"}}, fo);
 }
 
+// The template as an atlas folder in FreeSurfer layout (OUT/atlas: surf/?h.white, ?h.pial,
+// ?h.sphere, label/?h.cortex.label); returns the atlas maps of both hemispheres, read back from
+// those files as `run --atlas` reads them.
+struct VariabilityTemplate {
+  MatrixXd sphere;  // left template sphere (radius 100)
+  VectorXd sulc;
+  std::unique_ptr<Atlas> atlas[2];
+};
+
+MatrixXd mirror_x(MatrixXd P) {
+  P.col(0) = -P.col(0);
+  return P;
+}
+
+VariabilityTemplate write_atlas_folder(const std::string& out, const std::string& shared, const Hemisphere& left,
+                                       const Hemisphere& right, const PlantedRegion& region) {
+  VariabilityTemplate t;
+  t.sphere = io::read_surface(shared + "/fsaverage5/sphere_left.gii.gz").mesh.V;
+  t.sulc = io::read_per_vertex(shared + "/fsaverage5/sulc_left.gii.gz", left.white.num_vertices());
+  for (const char* sub : {"/atlas/surf", "/atlas/label", "/atlas/truth"}) fs::create_directories(out + sub);
+  write_hemisphere_files(out + "/atlas", left, region, "lh");
+  write_hemisphere_files(out + "/atlas", right, region, "rh");
+  io::write_surface(out + "/atlas/surf/lh.sphere", TriMesh{t.sphere, left.white.F});
+  io::write_surface(out + "/atlas/surf/rh.sphere", TriMesh{mirror_x(t.sphere), right.white.F});
+  for (int h = 0; h < 2; ++h) t.atlas[h] = std::make_unique<Atlas>(load_atlas(atlas_files_from_dir(out + "/atlas", h ? "rh" : "lh")));
+  return t;
+}
+
+// One subject's own anatomy (both hemispheres: the right is the mirror of the left variant), its
+// sphere.reg, lesion mask and the atlas map at its vertices' corresponding points.
+void write_variant_subject(const std::string& dir, const Hemisphere& left, const VariabilityTemplate& t,
+                           const PlantedRegion& region, const AnatomyWarp& warp) {
+  for (const char* sub : {"/surf", "/label", "/truth"}) fs::create_directories(dir + sub);
+  const AnatomyVariant v = anatomy_variant(left, t.sphere, t.sulc, region.left_mask, warp);
+  PlantedRegion own = region;
+  own.left_mask = own.right_mask = v.lesion;
+  const Hemisphere hemis[2] = {v.hemisphere, mirror_hemisphere(v.hemisphere)};
+  const MatrixXd reg[2] = {v.sphere_reg, mirror_x(v.sphere_reg)};
+  for (int h = 0; h < 2; ++h) {
+    const std::string name = h ? "rh" : "lh";
+    write_hemisphere_files(dir, hemis[h], own, name);
+    io::write_surface(dir + "/surf/" + name + ".sphere.reg", TriMesh{reg[h], hemis[h].white.F});
+    const AtlasSquare& a = t.atlas[h]->square;
+    const MatrixXd uv = interpolate_on_sphere(SpherePointLocator(a.S, a.map.F), a.map.UV, normalize_to_unit_sphere(reg[h], "sphere.reg"));
+    io::FuncWriteOptions fo;
+    fo.column_names = {"atlas_u", "atlas_v"};
+    fo.anatomical_structure = h ? "CortexRight" : "CortexLeft";
+    fo.metadata["description"] = "the atlas's authalic map (unit square) at each vertex's corresponding atlas point";
+    io::write_per_vertex(dir + "/truth/" + name + ".atlas_uv.func.gii", uv, fo);
+  }
+}
+
+// A subject's PET with its own anatomy: the variant's files written (write_variant_subject), the
+// healthy template and the lesion (empty: none) carried by its warp, then its effects.
+io::Volume variant_subject_pet(const std::string& dir, const Hemisphere& left, const VariabilityTemplate& t,
+                               const PlantedRegion& region, const PhantomOptions& options, PhantomRng& rng,
+                               const io::Volume& healthy, const SubjectEffects& effects, const std::vector<float>& lesion,
+                               double reference) {
+  const AnatomyWarp warp = draw_anatomy_warp(rng, options.area_change, options.deformation_wavelength_mm, options.fold_change);
+  write_variant_subject(dir, left, t, region, warp);
+  io::Volume column = healthy;
+  column.data = lesion;
+  return subject_pet(deform_volume(healthy, warp), effects, lesion.empty() ? lesion : deform_volume(column, warp).data,
+                     reference);
+}
+
+// cohort.csv: the shared anatomy in surf/ and label/, or (variability) each subject's own with its sphere.reg.
+std::string cohort_csv_text(const std::vector<PhantomSubject>& subjects, bool variability) {
+  std::ostringstream csv;
+  csv << "subject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex"
+      << (variability ? ",lh_sphere_reg,rh_sphere_reg\n" : "\n");
+  for (const auto& s : subjects) {
+    const std::string d = variability ? "sub-" + s.id + "/" : "";
+    csv << s.id << ',' << s.role << ',' << csv_number(s.age) << ',' << s.pet << ',' << d << "surf/lh.white," << d
+        << "surf/lh.pial," << d << "surf/rh.white," << d << "surf/rh.pial," << d << "label/lh.cortex.label," << d
+        << "label/rh.cortex.label";
+    if (variability) csv << ',' << d << "surf/lh.sphere.reg," << d << "surf/rh.sphere.reg";
+    csv << '\n';
+  }
+  return csv.str();
+}
+
 }  // namespace
 
 PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& options, const ProgressFn& progress) {
@@ -697,6 +783,15 @@ PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& op
 
   write_hemisphere_files(out, left, result.region, "lh");
   write_hemisphere_files(out, right, result.region, "rh");
+  VariabilityTemplate variability;
+  if (options.anatomical_variability) {
+    if (!use_shared)
+      throw InputError("phantom --anatomical-variability: needs the fsaverage5 template and spm/PET.nii of --shared "
+                       "(../shared/data); give --shared DIR");
+    report(progress, "phantom", 0.06, "atlas (the template) and its maps");
+    variability = write_atlas_folder(out, options.shared_dir, left, right, result.region);
+  }
+  PhantomRng anatomy_rng(options.seed ^ 0x9e3779b97f4a7c15ULL);  // its own stream: the PET draws stay as without
 
   // Subjects.
   PhantomRng rng(options.seed);
@@ -710,8 +805,12 @@ PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& op
     subj.effects = draw_subject_effects(rng);
     subj.pet = "sub-" + subj.id + "/sub-" + subj.id + "_pet.nii.gz";
     report(progress, "phantom", 0.05 + 0.95 * s / total, subj.id);
-    const io::Volume pet = subject_pet(healthy, subj.effects, patient ? multiplier : std::vector<float>{}, reference);
     fs::create_directories(out + "/sub-" + subj.id, ec);
+    const std::vector<float> lesion = patient ? multiplier : std::vector<float>{};
+    const io::Volume pet = options.anatomical_variability
+                               ? variant_subject_pet(out + "/sub-" + subj.id, left, variability, result.region, options,
+                                                     anatomy_rng, healthy, subj.effects, lesion, reference)
+                               : subject_pet(healthy, subj.effects, lesion, reference);
     if (ec) throw InputError(out + "/sub-" + subj.id + ": cannot create the folder (" + ec.message() + ")");
     io::write_nifti(out + "/" + subj.pet, pet,
                     "authalic phantom " + subj.role + (patient ? " (planted -" + csv_number(100 * options.region_depth) + "%)" : ""));
@@ -720,11 +819,7 @@ PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& op
 
   // Cohort table, region description, generator record.
   std::ostringstream csv;
-  csv << "subject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex\n";
-  for (const auto& s : result.subjects) {
-    csv << s.id << ',' << s.role << ',' << csv_number(s.age) << ',' << s.pet
-        << ",surf/lh.white,surf/lh.pial,surf/rh.white,surf/rh.pial,label/lh.cortex.label,label/rh.cortex.label\n";
-  }
+  csv << cohort_csv_text(result.subjects, options.anatomical_variability);
   result.cohort_csv = out + "/cohort.csv";
   io::write_file_atomically(result.cohort_csv, csv.str());
 
@@ -769,6 +864,14 @@ PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& op
       {"generator", std::string("authalic phantom ") + kVersion},
       {"seed", options.seed},
       {"source", result.source},
+      {"anatomical_variability", options.anatomical_variability
+                                     ? nlohmann::json{{"area_change", options.area_change},
+                                                    {"deformation_wavelength_mm", options.deformation_wavelength_mm},
+                                                    {"fold_change", options.fold_change},
+                                                      {"model", "analysis/phantom_anatomy.h: sphere warp (sphere.reg = exact "
+                                                                "correspondence), folding change, 3D deformation carrying "
+                                                                "the anatomy, PET and lesion; atlas = the template (atlas/)"}}
+                                     : nlohmann::json(false)},
       {"controls", options.controls},
       {"patients", options.patients},
       {"pet_units", "Bq/mL"},

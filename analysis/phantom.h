@@ -153,6 +153,14 @@ struct PhantomOptions {
   double region_radius_mm = 22.0;
   double region_depth = 0.25;
   SyntheticHemisphereOptions synthetic_options;
+  // Anatomical variability (issue 14, analysis/phantom_anatomy.h; shared data only): every subject
+  // gets its own smooth random variant of the template's anatomy, with its sphere.reg (the exact
+  // correspondence) and its PET carried by the same deformation; the lesion is planted in template
+  // (atlas) coordinates. The template is written as an atlas folder OUT/atlas (FreeSurfer layout).
+  bool anatomical_variability = false;
+  double area_change = 0.15;  // local surface area changes up to about this fraction
+  double deformation_wavelength_mm = 120.0;  // of the area changes (analysis/phantom_anatomy.h)
+  double fold_change = 0.12;  // normal offset per mm of sulcal depth (folding change), at most
 };
 
 struct PhantomSubject {
@@ -180,6 +188,11 @@ struct PhantomResult {
 //   label/{lh,rh}.cortex.label  FreeSurfer labels of the cortex (the disk)
 //   truth/{lh,rh}.lesion.label.gii  per-vertex planted region (1) / healthy (0); truth/lesion.json
 //   sub-<id>/sub-<id>_pet.nii.gz    PET (Bq/mL, float32)
+// With anatomical_variability the subjects' anatomy is their own: cohort.csv points at
+//   sub-<id>/surf/{lh,rh}.{white,pial,sphere.reg}, sub-<id>/label/{lh,rh}.cortex.label (columns
+//   lh_sphere_reg, rh_sphere_reg added), sub-<id>/truth/{lh,rh}.lesion.label.gii (the lesion carried
+//   over) and sub-<id>/truth/{lh,rh}.atlas_uv.func.gii (the atlas map at each vertex's corresponding
+//   atlas point: the ground truth of element correspondence); the template is OUT/atlas.
 // Same options (seed included) -> byte-identical files.
 PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& options, const ProgressFn& progress = {});
 

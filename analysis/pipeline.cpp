@@ -11,10 +11,12 @@
 #include <iomanip>
 #include <limits>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <tuple>
 
+#include "analysis/atlas.h"
 #include "analysis/cortex_region.h"
 #include "analysis/elements.h"
 #include "analysis/normative.h"
@@ -93,6 +95,8 @@ struct Hemisphere {
   MatrixXi cortex_faces;        // faces of the white surface inside the cortex region
   TopologyReport cortex_topology;  // of cortex_faces (checked once, when read)
   // map
+  std::string sphere_reg;       // atlas mode: the subject's sphere.reg ("" per subject)
+  std::unique_ptr<Atlas> atlas; // atlas mode: the atlas hemisphere and its map
   SquareMapResult map;          // the authalic square map (V, F, UV in [0,1]^2, flow report)
   MapMetrics metrics;
   // PET
@@ -190,6 +194,8 @@ SubjectInputs inputs_from_subjects_dir(const std::string& subjects_dir, const st
   in.rh_pial = need("surf/rh.pial");
   in.lh_cortex = need("label/lh.cortex.label");
   in.rh_cortex = need("label/rh.cortex.label");
+  for (auto [hemi, reg] : {std::pair<const char*, std::string*>{"lh", &in.lh_sphere_reg}, {"rh", &in.rh_sphere_reg}})
+    if (fs::exists(base / "surf" / (std::string(hemi) + ".sphere.reg"))) *reg = (base / "surf" / (std::string(hemi) + ".sphere.reg")).string();
   // BIDS labels are alphanumeric: FreeSurfer subject names often are not (bert_01).
   std::string id;
   for (char c : subject)
@@ -205,11 +211,66 @@ namespace {
 // The authalic square map with the anatomical orientation rule (core/square_map.h): faces
 // outward, frontal pole at the top middle, so the right hemisphere comes out as the mirror image
 // of the left, as a reader of the two flat maps side by side expects.
-void map_hemisphere(Hemisphere& h, const ProgressFn& progress) {
+// In atlas mode the map starts from the atlas's map carried through sphere.reg (core/atlas_map.h);
+// returns a line for the log (how far the flow moved the vertices from the atlas position).
+std::string map_hemisphere(Hemisphere& h, const ProgressFn& progress) {
   SquareMapOptions options;
   options.region_name = h.name + " hemisphere cortex";
   options.region_topology = h.cortex_topology;
-  h.map = square_map(h.white.mesh.V, h.cortex_faces, options, progress);
+  if (!h.atlas) {
+    h.map = square_map(h.white.mesh.V, h.cortex_faces, options, progress);
+    return "per-subject correspondence";
+  }
+  const io::Surface reg = io::read_surface(h.sphere_reg);
+  if (reg.mesh.num_vertices() != h.white.mesh.num_vertices())
+    throw InputError(h.sphere_reg + ": has " + std::to_string(reg.mesh.num_vertices()) + " vertices but the " + h.name +
+                     " white surface has " + std::to_string(h.white.mesh.num_vertices()) + "; give this hemisphere's sphere.reg");
+  AtlasMapResult r = square_map_from_atlas(h.white.mesh.V, h.cortex_faces, reg.mesh.V, h.atlas->square, options, 32, progress);
+  h.map = std::move(r.map);
+  std::ostringstream s;
+  s << "atlas correspondence (" << h.atlas->files.white << ", identity " << h.atlas->identity << "): "
+    << r.transfer.outside << " vertices outside the atlas cortex (" << 100 * r.transfer.outside_area_share
+    << " % of the area, placed at its nearest point); the flow moved vertices from the atlas position by median "
+    << r.displacement.median << ", 95th percentile " << r.displacement.p95 << ", max " << r.displacement.max << " elements (K = 32)";
+  return s.str();
+}
+
+// Atlas or per-subject correspondence (issue 14): the atlas is used when --atlas is given and both
+// hemispheres have a sphere.reg; otherwise per subject, with a warning saying why. Loads the atlas
+// hemispheres (their maps are computed here). Returns the mode recorded in every output.
+std::string choose_correspondence(Hemisphere (&hemis)[2], const SubjectInputs& in, const RunOptions& options,
+                                  RunSummary& summary, const ProgressFn& progress) {
+  if (options.atlas_dir.empty()) return kPerSubjectCorrespondence;
+  if (in.lh_sphere_reg.empty() || in.rh_sphere_reg.empty()) {
+    summary.warnings.push_back(std::string("--atlas ") + options.atlas_dir + ": the subject has no " +
+                               (in.lh_sphere_reg.empty() ? "lh" : "rh") +
+                               ".sphere.reg (FreeSurfer's surf/?h.sphere.reg, or --lh-sphere-reg/--rh-sphere-reg): the maps "
+                               "were made per subject, not in atlas correspondence; compare them only with a per-subject reference");
+    return kPerSubjectCorrespondence;
+  }
+  std::string mode = "atlas";
+  for (Hemisphere& h : hemis) {
+    h.sphere_reg = h.left ? in.lh_sphere_reg : in.rh_sphere_reg;
+    h.atlas = std::make_unique<Atlas>(load_atlas(atlas_files_from_dir(options.atlas_dir, h.left ? "lh" : "rh"), progress));
+    mode += (h.left ? " " : "+") + h.atlas->identity;
+  }
+  return mode;
+}
+
+// The step: the mode, logged, and refused before minutes of mapping when the reference (if any) was
+// built in another one.
+std::string correspondence_step(Hemisphere (&hemis)[2], const SubjectInputs& in, const RunOptions& options,
+                                const NormativeReference* reference, StepLog& log, RunSummary& summary,
+                                const ProgressFn& progress) {
+  log.begin("element correspondence");
+  const std::string mode = choose_correspondence(hemis, in, options, summary, progress);
+  log.note("mode: " + mode);
+  if (reference && reference->correspondence != mode)
+    throw InputError(in.normative + ": the reference's element correspondence is '" + reference->correspondence +
+                     "' but this run's is '" + mode + "'; elements would cover different anatomy: run in the "
+                     "reference's mode (with or without --atlas and sphere.reg) or use a reference built in this one");
+  log.end(summary);
+  return mode;
 }
 
 // Acceptance of a map before anything is computed from it (core/metrics.h): a failed map stops
@@ -221,6 +282,28 @@ void require_authalic(const std::string& what, const MapMetrics& m, const Matrix
   const std::string problem = authalic_acceptance_problem(at32, at32.vertex_ln_area.mean, true);
   if (!problem.empty())
     throw ProcessingError(what + ": the map is not authalic: " + problem + "; no z-scores or report were written");
+}
+
+// The whole brain on the 2:1 rectangle: the two hemispheres side by side, each part's width
+// proportional to its cortical area (core/rectangle_map.h, form b). Returns its metrics.
+MapMetrics rectangle_step(const Hemisphere (&hemis)[2], const RunOptions& options, StepLog& log, RunSummary& summary,
+                          HemisphereRectangles& rect) {
+  log.begin("authalic 2:1 rectangle (both hemispheres)");
+  // The two square maps stretched to their shares (core/rectangle_map.h): no map is recomputed.
+  rect = hemisphere_rectangles_from_squares(hemis[0].map, hemis[1].map);
+  const Eigen::Index nl = rect.left.V.rows();
+  MatrixXd V(nl + rect.right.V.rows(), 3), UV(nl + rect.right.V.rows(), 2);
+  V << rect.left.V, rect.right.V;
+  UV << rect.left.UV, rect.right.UV;
+  MatrixXi F(rect.left.F.rows() + rect.right.F.rows(), 3);
+  F << rect.left.F, (rect.right.F.array() + static_cast<int>(nl)).matrix();
+  const MapMetrics m = map_metrics(V, UV, F, Domain::rectangle(), options.k);
+  log.note("left part width " + std::to_string(rect.split) + " of 2; flips " + std::to_string(m.flips) +
+           ", element-area CV " + std::to_string(m.element_cv) + " (" + std::to_string(2 * options.k) + "x" +
+           std::to_string(options.k) + ")");
+  require_authalic("the 2:1 rectangle of both hemispheres", m, options.k == 32 ? nullptr : &V, UV, F, Domain::rectangle());
+  log.end(summary);
+  return m;
 }
 
 // The element image of one block as a K x K NIfTI (voxel (col, row)); the affine is a plain
@@ -288,7 +371,8 @@ json input_checksums(const SubjectInputs& in) {
   json j;
   for (const auto& [key, path] : std::vector<std::pair<std::string, std::string>>{
            {"lh_white", in.lh_white}, {"lh_pial", in.lh_pial}, {"rh_white", in.rh_white}, {"rh_pial", in.rh_pial},
-           {"lh_cortex", in.lh_cortex}, {"rh_cortex", in.rh_cortex}, {"pet", in.pet}, {"t1", in.t1}, {"normative", in.normative}}) {
+           {"lh_cortex", in.lh_cortex}, {"rh_cortex", in.rh_cortex}, {"pet", in.pet}, {"t1", in.t1}, {"normative", in.normative},
+           {"lh_sphere_reg", in.lh_sphere_reg}, {"rh_sphere_reg", in.rh_sphere_reg}}) {
     if (path.empty()) continue;
     j[key] = {{"path", path},  // as given (relative paths: to the folder the command ran in)
               {"sha256", fs::is_directory(path) ? std::string("(folder)") : io::sha256_file(path)}};
@@ -511,7 +595,8 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   check_id(in.id);
   if (options.out_dir.empty()) throw InputError("--out: no output folder given");
   const fs::path final_dir = fs::path(options.out_dir) / ("sub-" + in.id);
-  io::check_inputs_outside({in.lh_white, in.lh_pial, in.rh_white, in.rh_pial, in.lh_cortex, in.rh_cortex, in.pet, in.t1, in.normative, in.lh_annot, in.rh_annot},
+  io::check_inputs_outside({in.lh_white, in.lh_pial, in.rh_white, in.rh_pial, in.lh_cortex, in.rh_cortex, in.pet, in.t1, in.normative,
+                            in.lh_annot, in.rh_annot, in.lh_sphere_reg, in.rh_sphere_reg},
                            final_dir.string(), options.force ? "--force would replace" : "is the subject's output folder");
   const OutFolder out_folder(options.out_dir);
   // The whole run holds the subject's lock: a second run on the same OUT/sub-<id> is refused
@@ -556,10 +641,12 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   const json checksums = input_checksums(in);
   log.end(summary);
 
-  // 2. Authalic square map per hemisphere.
+  // 2. Authalic square map per hemisphere (in atlas correspondence when possible).
+  const std::string correspondence =
+      correspondence_step(hemis, in, options, compare ? &reference : nullptr, log, summary, progress);
   for (Hemisphere& h : hemis) {
     log.begin("authalic square map (" + h.name + ")");
-    map_hemisphere(h, progress);
+    log.note(map_hemisphere(h, progress));
     h.metrics = map_metrics(h.map.V, h.map.UV, h.map.F, Domain::square(), options.k);
     log.note("flips " + std::to_string(h.metrics.flips) + ", element-area CV " + std::to_string(h.metrics.element_cv) +
              ", flow " + h.map.flow.stop_reason);
@@ -568,28 +655,10 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     log.end(summary);
   }
 
-  // 2b. The whole brain on the 2:1 rectangle: the two hemispheres side by side, each part's width
-  // proportional to its cortical area (core/rectangle_map.h, form b).
+  // 2b. The whole brain on the 2:1 rectangle.
   HemisphereRectangles rect;
   MapMetrics rect_metrics;
-  if (options.rectangle) {
-    log.begin("authalic 2:1 rectangle (both hemispheres)");
-    // The two square maps stretched to their shares (core/rectangle_map.h): no map is recomputed.
-    rect = hemisphere_rectangles_from_squares(hemis[0].map, hemis[1].map);
-    const Eigen::Index nl = rect.left.V.rows();
-    MatrixXd V(nl + rect.right.V.rows(), 3), UV(nl + rect.right.V.rows(), 2);
-    V << rect.left.V, rect.right.V;
-    UV << rect.left.UV, rect.right.UV;
-    MatrixXi F(rect.left.F.rows() + rect.right.F.rows(), 3);
-    F << rect.left.F, (rect.right.F.array() + static_cast<int>(nl)).matrix();
-    rect_metrics = map_metrics(V, UV, F, Domain::rectangle(), options.k);
-    log.note("left part width " + std::to_string(rect.split) + " of 2; flips " + std::to_string(rect_metrics.flips) +
-             ", element-area CV " + std::to_string(rect_metrics.element_cv) + " (" + std::to_string(2 * options.k) + "x" +
-             std::to_string(options.k) + ")");
-    require_authalic("the 2:1 rectangle of both hemispheres", rect_metrics, options.k == 32 ? nullptr : &V, UV, F,
-                     Domain::rectangle());
-    log.end(summary);
-  }
+  if (options.rectangle) rect_metrics = rectangle_step(hemis, options, log, summary, rect);
 
   // 3. PET by normal projection from the pial surface inward (Zou et al. 2011, section 5.2).
   log.begin("PET sampling");
@@ -645,6 +714,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   table.age = in.age > 0 ? in.age : std::numeric_limits<double>::quiet_NaN();
   table.metadata["software"] = software_version();
   table.metadata["sampling"] = hemis[0].sampling.method;
+  table.metadata["correspondence"] = correspondence;
   for (Hemisphere& h : hemis) {
     const ElementMap m = prepare_element_map(h.white.mesh.V, h.cortex_faces, h.map.UV, h.map.F, h.pet, Domain::square(),
                                              h.name + " square map");
@@ -690,7 +760,8 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
                  {"normalisation", norm.description.empty() ? "none" : norm.description},
                  {"z_threshold", options.z_threshold},
                  {"z_age_adjusted", compare && cmp.age_adjusted},
-                 {"rescale_to_reference", options.rescale}};
+                 {"rescale_to_reference", options.rescale},
+                 {"correspondence", correspondence}};
   // The subject as BIDS participants.tsv describes one (null: not given).
   const json participant = {{"participant_id", "sub-" + in.id},
                             {"age", in.age > 0 ? json(in.age) : json(nullptr)},

@@ -21,6 +21,9 @@ struct SubjectInputs {
   std::string lh_cortex, rh_cortex;                  // cortex regions (FreeSurfer label, GIFTI label/mask)
   std::string pet;                                   // NIfTI, MGH/MGZ or a DICOM folder
   std::string t1;                                    // optional, for --register
+  // Optional FreeSurfer ?h.sphere.reg (vertices on the atlas sphere): with RunOptions::atlas_dir the
+  // maps are made in atlas correspondence (analysis/atlas.h).
+  std::string lh_sphere_reg, rh_sphere_reg;
   std::string normative;                             // optional reference (authalic normative build)
   double age = 0;                                    // years, 0 = unknown
   std::string sex;                                   // "F", "M", "O" or empty (unknown)
@@ -33,7 +36,8 @@ struct SubjectInputs {
 // present and not given explicitly.
 void default_annotations(SubjectInputs& inputs);
 
-// FreeSurfer subject folder -> inputs: surf/?h.white, surf/?h.pial, label/?h.cortex.label;
+// FreeSurfer subject folder -> inputs: surf/?h.white, surf/?h.pial, label/?h.cortex.label, and
+// surf/?h.sphere.reg when present (left empty when missing; run says which mode it used);
 // the surfaces' footers carry c_ras (tkregister RAS -> scanner RAS). Throws InputError naming the
 // missing file.
 SubjectInputs inputs_from_subjects_dir(const std::string& subjects_dir, const std::string& subject);
@@ -85,6 +89,10 @@ struct RunOptions {
   int pet_frame = -1;           // 4D PET: the frame to sample (0-based); -1: none chosen
   bool pet_sum_frames = false;  // 4D PET: sum all frames
   std::string command_line;     // as invoked, recorded in every sidecar (provenance); may be empty
+  // Atlas folder in FreeSurfer layout (analysis/atlas.h): with both sphere.reg inputs the maps start
+  // from the atlas's map carried through sphere.reg (elements correspond across subjects); without
+  // them the run is per subject and says so (a warning).
+  std::string atlas_dir;
 };
 
 struct RunSummary {

@@ -134,6 +134,9 @@ int run_elements(const ElementsArgs& a) {
                     {"element_area_cv", std::to_string(result.area_cv)},
                     {"total_area_mm2", std::to_string(result.total_area_mm2)},
                     {"integration", "area-weighted mean over triangles clipped to the cells (exact for linear values)"}};
+  // The map's correspondence mode (flatten records it; issue 14), so references never mix modes.
+  if (const auto c = map.metadata.find("authalic_correspondence"); c != map.metadata.end())
+    table.metadata["correspondence"] = c->second;
   if (meta.count("sampling")) table.metadata["sampling"] = meta.at("sampling");
   if (meta.count("normalisation_detail")) table.metadata["normalisation_detail"] = meta.at("normalisation_detail");
 

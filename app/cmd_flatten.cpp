@@ -1,4 +1,5 @@
 // `authalic flatten SURFACE OUT.surf.gii [--faces-from FILE | --label FILE | --patch FILE]
+//  [--sphere-reg REG (--atlas DIR | --atlas-surface W --atlas-sphere S (--atlas-label L | --atlas-faces-from F))]
 //  [--uv UV.surf.gii] [--metrics M.json] [--png P.png] [--density D] [--threads N]`:
 // authalic map of a cortical region onto the unit square (core/square_map.h).
 #include <chrono>
@@ -8,6 +9,8 @@
 #include <sstream>
 #include <tuple>
 
+#include "analysis/atlas.h"
+#include "analysis/elements.h"
 #include "analysis/render.h"
 #include "analysis/report.h"
 #include "app/command.h"
@@ -30,6 +33,8 @@ struct FlattenArgs {
   std::string faces_from, label, patch;
   std::string uv, metrics, png, histogram, fs_patch, initial;
   std::string density, shading;
+  // Atlas correspondence (issue 14): the subject's sphere.reg and the atlas.
+  std::string sphere_reg, atlas_dir, atlas_surface, atlas_sphere, atlas_label, atlas_faces_from;
   std::string method = "grid";
   int k = 32;
   int grid = 512;
@@ -151,11 +156,61 @@ nlohmann::json transport_json(const SquareMapResult& r, const SquareMapOptions& 
   return t;
 }
 
+// The atlas files of the atlas options (none given: per-subject mode, empty files).
+analysis::AtlasFiles atlas_files(const FlattenArgs& a, const io::Surface& surface) {
+  const bool explicit_atlas = !a.atlas_surface.empty() || !a.atlas_sphere.empty() || !a.atlas_label.empty() ||
+                              !a.atlas_faces_from.empty();
+  if (a.sphere_reg.empty()) {
+    if (explicit_atlas || !a.atlas_dir.empty())
+      throw InputError("flatten: the atlas options need --sphere-reg (the subject's ?h.sphere.reg: its vertices on the atlas sphere)");
+    return {};
+  }
+  if (!a.atlas_dir.empty()) {
+    const std::string hemi = analysis::hemisphere_of(surface.metadata, a.surface);
+    if (hemi == "unknown")
+      throw InputError(a.surface + ": cannot tell the hemisphere (no lh./rh. name or GIFTI structure) to pick the atlas's; "
+                       "give --atlas-surface, --atlas-sphere and --atlas-label instead of --atlas");
+    return analysis::atlas_files_from_dir(a.atlas_dir, hemi == "left" ? "lh" : "rh");
+  }
+  if (a.atlas_surface.empty() || a.atlas_sphere.empty() || a.atlas_label.empty() == a.atlas_faces_from.empty())
+    throw InputError("flatten: --sphere-reg needs the atlas: --atlas DIR, or --atlas-surface, --atlas-sphere and one of "
+                     "--atlas-label, --atlas-faces-from");
+  return {a.atlas_surface, a.atlas_sphere, a.atlas_label.empty() ? a.atlas_faces_from : a.atlas_label};
+}
+
+// The map: per subject (square_map), or in atlas correspondence (the atlas's map carried through
+// sphere.reg, then made authalic: core/atlas_map.h). *correspondence: the mode and its numbers.
+SquareMapResult map_region(const FlattenArgs& a, const io::Surface& surface, const MatrixXi& region,
+                           const SquareMapOptions& options, const ProgressFn& progress, nlohmann::json* correspondence) {
+  const analysis::AtlasFiles files = atlas_files(a, surface);
+  if (files.white.empty()) {
+    *correspondence = {{"mode", analysis::kPerSubjectCorrespondence}};
+    return square_map(surface.mesh.V, region, options, progress);
+  }
+  const io::Surface reg = io::read_surface(a.sphere_reg);
+  if (reg.mesh.num_vertices() != surface.mesh.num_vertices())
+    throw InputError(a.sphere_reg + ": has " + std::to_string(reg.mesh.num_vertices()) + " vertices but " + a.surface + " has " +
+                     std::to_string(surface.mesh.num_vertices()) + "; give this surface's sphere.reg");
+  const analysis::Atlas atlas = analysis::load_atlas(files, progress);
+  AtlasMapResult r = square_map_from_atlas(surface.mesh.V, region, reg.mesh.V, atlas.square, options, a.k, progress);
+  *correspondence = {{"mode", analysis::atlas_mode(files)},
+                     {"atlas", {{"white", files.white}, {"sphere", files.sphere}, {"cortex", files.cortex}, {"identity", atlas.identity}}},
+                     {"sphere_reg", a.sphere_reg},
+                     {"outside_rule", "vertices outside the atlas cortex on the sphere take the atlas map at its nearest point"},
+                     {"vertices_outside_atlas_cortex", r.transfer.outside},
+                     {"area_share_outside_atlas_cortex", r.transfer.outside_area_share},
+                     {"start_vertices_repaired", r.map.start_repaired},
+                     {"flow_displacement_elements",
+                      {{"k", a.k}, {"median", r.displacement.median}, {"p95", r.displacement.p95}, {"max", r.displacement.max}}}};
+  return std::move(r.map);
+}
+
 void run(const FlattenArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const int given = !a.faces_from.empty() + !a.label.empty() + !a.patch.empty();
   if (given > 1) throw InputError("flatten: give at most one of --faces-from, --label, --patch");
-  io::check_file_roles({a.surface, a.faces_from, a.label, a.patch, a.density, a.shading},
+  io::check_file_roles({a.surface, a.faces_from, a.label, a.patch, a.density, a.shading, a.sphere_reg, a.atlas_surface,
+                        a.atlas_sphere, a.atlas_label, a.atlas_faces_from},
                        {a.out, a.uv, a.initial, a.fs_patch, a.metrics, a.png, a.histogram});
   const io::Surface surface = io::read_surface(a.surface);
   const TriMesh& mesh = surface.mesh;
@@ -195,8 +250,9 @@ void run(const FlattenArgs& a) {
 
   SquareMapResult r;
   StageClock clock(terminal_progress());
+  nlohmann::json correspondence;
   try {
-    r = square_map(mesh.V, region, options, clock.progress());
+    r = map_region(a, surface, region, options, clock.progress(), &correspondence);
   } catch (const InputError& e) {
     throw InputError(a.surface + " (" + region_source + "): " + e.what());
   } catch (const ProcessingError& e) {
@@ -231,7 +287,8 @@ void run(const FlattenArgs& a) {
                  {"authalic_region", region_source},
                  {"authalic_input_vertices", std::to_string(r.num_input_vertices)},
                  {"authalic_cortical_area_mm2", std::to_string(r.surface_area)},
-                 {"authalic_acceptance", problem.empty() ? "passed" : "FAILED: " + problem}};
+                 {"authalic_acceptance", problem.empty() ? "passed" : "FAILED: " + problem},
+                 {"authalic_correspondence", correspondence["mode"].get<std::string>()}};
   if (r.initial.inserted_parents.rows() > 0)
     wo.metadata[kInsertedVerticesKey] = inserted_vertices_text(r.initial.inserted_parents, r.initial.inserted_weight);
   write_flat(a.out, r.UV * scale, r.F, wo,
@@ -289,6 +346,7 @@ void run(const FlattenArgs& a) {
                       {"seconds", {{"map", seconds_map}, {"initial_map", clock.seconds("initial")}, {"flow", clock.seconds("stretch") + clock.seconds("flow")}, {"total", seconds}}}};
   if (cleanup) j["region_cleanup"] = region_cleanup_json(*cleanup);
   j["transport"] = transport_json(r, options);
+  j["correspondence"] = correspondence;
   j["acceptance"] = acceptance_json(problem, "32x32");
   j["initial_map"]["stretch_energy"] = {{"iterations", r.stretch.iterations},
                                         {"face_ln_stretch_abs_mean_before", r.stretch.initial_log_stretch},
@@ -411,6 +469,18 @@ void setup(CLI::App& parent) {
                 "Split every interior edge whose ends land on one side of the square at its midpoint (Zou et al. 2011, "
                 "section 4.1) instead of flipping it; the maps then have appended vertices, recorded as "
                 "authalic_inserted_vertices metadata, and do not pair with the surface's per-vertex files");
+  sub->add_option("--sphere-reg", a->sphere_reg,
+                  "Atlas correspondence: the subject's FreeSurfer ?h.sphere.reg (its vertices on the atlas sphere). The "
+                  "atlas's authalic map is carried to the subject through it (barycentric on the atlas sphere) and made "
+                  "authalic for this subject, so elements cover the same anatomy in every subject; needs --atlas or the "
+                  "--atlas-* files");
+  sub->add_option("--atlas", a->atlas_dir,
+                  "Atlas folder in FreeSurfer layout (surf/?h.white, surf/?h.sphere, label/?h.cortex.label; e.g. "
+                  "$FREESURFER_HOME/subjects/fsaverage); the hemisphere is the surface's");
+  sub->add_option("--atlas-surface", a->atlas_surface, "Atlas white surface (instead of --atlas)");
+  sub->add_option("--atlas-sphere", a->atlas_sphere, "Atlas sphere (?h.sphere), same vertices as --atlas-surface");
+  sub->add_option("--atlas-label", a->atlas_label, "Atlas cortex as a label (vertices) of --atlas-surface");
+  sub->add_option("--atlas-faces-from", a->atlas_faces_from, "Atlas cortex as the faces of this surface (e.g. its flat patch)");
   add_max_memory_option(*sub, &a->max_memory);
   sub->add_option("--max-vertices", a->max_vertices,
                   "Largest region (vertices) accepted; the map is validated up to 150k (fsaverage5 subdivided twice)")

@@ -123,6 +123,7 @@ struct GroupArgs {
   double threshold = 2.0;
   bool rectangle = true, rescale = true;
   std::string normative;  // an existing reference for the patients: none is built from the controls
+  std::string atlas;      // run --atlas: atlas correspondence for subjects with sphere.reg columns
 };
 
 // The options of `run` that `group` passes on, as arguments.
@@ -132,6 +133,7 @@ std::vector<std::string> run_options(const GroupArgs& a) {
   std::vector<std::string> o = {"--normalize", a.normalize, "--threshold", t.str()};
   if (!a.rectangle) o.push_back("--no-rectangle");
   if (!a.rescale) o.push_back("--no-rescale");
+  if (!a.atlas.empty()) o.insert(o.end(), {"--atlas", a.atlas});
   return o;
 }
 
@@ -143,6 +145,8 @@ std::vector<std::string> subject_args(const std::string& exe, const CohortSubjec
   if (s.age > 0) args.insert(args.end(), {"--age", std::to_string(s.age)});  // unknown: left out
   if (!s.t1.empty()) args.insert(args.end(), {"--t1", s.t1});                // the PET is registered to it
   if (!s.sex.empty()) args.insert(args.end(), {"--sex", s.sex});
+  if (!s.lh_sphere_reg.empty()) args.insert(args.end(), {"--lh-sphere-reg", s.lh_sphere_reg});
+  if (!s.rh_sphere_reg.empty()) args.insert(args.end(), {"--rh-sphere-reg", s.rh_sphere_reg});
   return args;
 }
 
@@ -276,8 +280,8 @@ const bool registered = register_command({60, [](CLI::App& parent) {
       "Run the per-subject pipeline for a cohort (controls first), build the normative reference from the "
       "controls (or take an existing one, --normative), then compare the patients with it; run's --normalize, "
       "--threshold, --no-rectangle and --no-rescale apply to every subject. COHORT.csv columns: subject_id,role(control|patient),age,"
-      "pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex, optional t1 (run --t1: the PET is registered to it) and "
-      "sex (F, M, O) (paths relative to the CSV; RFC 4180 CSV as spreadsheets "
+      "pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex, optional t1 (run --t1: the PET is registered to it), "
+      "sex (F, M, O) and lh_sphere_reg, rh_sphere_reg (with --atlas: atlas correspondence) (paths relative to the CSV; RFC 4180 CSV as spreadsheets "
       "write it: quoted fields, CRLF, a UTF-8 byte-order mark). Writes "
       "OUT/sub-<id>/ for every subject (as run writes it), OUT/participants.tsv (+ .json: group, age, sex, folder, status), OUT/normative.json and OUT/logs/<id>.log (each subject's progress and messages). "
       "A failed subject is reported and does not stop the others (exit 3 at the end).");
@@ -296,6 +300,9 @@ const bool registered = register_command({60, [](CLI::App& parent) {
       ->capture_default_str();
   sub->add_flag("--no-rectangle", [args](std::int64_t) { args->rectangle = false; }, "Skip the whole-brain 2:1 rectangle map of every subject");
   sub->add_flag("--no-rescale", [args](std::int64_t) { args->rescale = false; }, "As `run --no-rescale`, for the patients");
+  sub->add_option("--atlas", args->atlas,
+                  "As `run --atlas`: atlas folder (FreeSurfer layout); subjects with lh_sphere_reg and rh_sphere_reg "
+                  "columns are mapped in atlas correspondence (the reference records the mode; others are refused by it)");
   sub->add_option("--normative", args->normative,
                   "Compare the patients with this existing reference (authalic normative build) instead of building one "
                   "from the controls; its K must match --k (checked before any map)")

@@ -81,6 +81,19 @@ void setup(CLI::App& parent) {
   sub->add_option("--seed", args->seed, "Random seed: the same seed gives byte-identical files")->capture_default_str();
   sub->add_flag("--synthetic", args->options.synthetic, "Use the built-in synthetic hemisphere and PET even when shared data exist");
   sub->add_option("--shared", args->shared, "Folder with fsaverage5/ and spm/PET.nii (default: ../shared/data beside the checkout)");
+  sub->add_flag("--anatomical-variability", args->options.anatomical_variability,
+                "Every subject gets its own anatomy: a smooth random variant of fsaverage5 (sphere warp, folding change, "
+                "3D deformation; local area changes up to about --area-change) with its sphere.reg (the exact "
+                "correspondence), its PET and lesion carried by the same deformation, and the template as OUT/atlas "
+                "(for run --atlas); needs the shared data");
+  sub->add_option("--area-change", args->options.area_change, "Anatomical variability: local area change scale (0.15 = 15 %)")
+      ->check(in_range(0.0, 0.5))->capture_default_str();
+  sub->add_option("--deformation-wavelength", args->options.deformation_wavelength_mm,
+                  "Anatomical variability: wavelength of the area changes (mm)")
+      ->check(in_range(10.0, 1000.0))->capture_default_str();
+  sub->add_option("--fold-change", args->options.fold_change,
+                  "Anatomical variability: folding change, normal offset per mm of sulcal depth (at most)")
+      ->check(in_range(0.0, 0.5))->capture_default_str();
   sub->add_option("--voxel-size", args->options.voxel_mm, "Synthetic PET voxel size (mm)")->check(in_range(1.0, 10.0))
       ->capture_default_str();
   sub->add_option("--radius", args->options.region_radius_mm, "Planted region radius along the white surface (mm)")

@@ -44,6 +44,17 @@ int run(RunArgs& a) {
     in.dose = a.inputs.dose;
     if (!a.inputs.lh_annot.empty()) in.lh_annot = a.inputs.lh_annot;
     if (!a.inputs.rh_annot.empty()) in.rh_annot = a.inputs.rh_annot;
+    if (!a.inputs.lh_sphere_reg.empty()) in.lh_sphere_reg = a.inputs.lh_sphere_reg;
+    if (!a.inputs.rh_sphere_reg.empty()) in.rh_sphere_reg = a.inputs.rh_sphere_reg;
+    // Which correspondence the run will use, and why (issue 14).
+    if (a.options.atlas_dir.empty())
+      info("authalic run: per-subject element correspondence (no --atlas" +
+           std::string(in.lh_sphere_reg.empty() ? ")" : "; give --atlas DIR to map through surf/?h.sphere.reg)"));
+    else if (in.lh_sphere_reg.empty() || in.rh_sphere_reg.empty())
+      info("authalic run: " + subjects_dir + "/" + a.subject + "/surf/" + (in.lh_sphere_reg.empty() ? "lh" : "rh") +
+           ".sphere.reg is missing: per-subject element correspondence instead of the atlas's");
+    else
+      info("authalic run: atlas element correspondence through surf/?h.sphere.reg (atlas " + a.options.atlas_dir + ")");
   } else {
     const std::pair<const char*, const std::string*> need[] = {
         {"--lh-white", &in.lh_white}, {"--lh-pial", &in.lh_pial},     {"--rh-white", &in.rh_white},
@@ -114,6 +125,13 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_option("--subject", a->subject, "FreeSurfer subject name in --subjects-dir (or $SUBJECTS_DIR)");
   sub->add_option("--pet", in.pet, "PET volume registered to the surfaces (NIfTI, MGH/MGZ, DICOM folder); world = scanner RAS");
   sub->add_option("--t1", in.t1, "T1 MRI the surfaces belong to: the PET is rigidly registered to it (ITK v4, Mattes mutual information) before sampling; without it the PET is assumed co-registered");
+  sub->add_option("--atlas", a->options.atlas_dir,
+                  "Atlas folder in FreeSurfer layout (surf/?h.white, surf/?h.sphere, label/?h.cortex.label; e.g. "
+                  "$FREESURFER_HOME/subjects/fsaverage): the maps start from the atlas's authalic map carried through the "
+                  "subject's sphere.reg, so elements cover the same anatomy in every subject. Without a sphere.reg the run "
+                  "is per subject and says so");
+  sub->add_option("--lh-sphere-reg", in.lh_sphere_reg, "Left ?h.sphere.reg (with --atlas; --subjects-dir finds surf/lh.sphere.reg)");
+  sub->add_option("--rh-sphere-reg", in.rh_sphere_reg, "Right ?h.sphere.reg");
   sub->add_option("--normative", in.normative, "Normative reference (authalic normative build): adds z-scores");
   sub->add_option("--frame", a->options.pet_frame, "4D PET: the frame to sample (0-based)")->check(in_range(0, 100000));
   sub->add_flag("--require-age", a->options.require_age,

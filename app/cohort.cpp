@@ -125,6 +125,8 @@ std::vector<CohortSubject> read_cohort(const std::string& path) {
     s.rh_cortex = file("rh_cortex");
     if (col.count("t1") && !get("t1").empty()) s.t1 = file("t1");
     if (col.count("sex") && !get("sex").empty()) s.sex = parse_sex(get("sex"), where);
+    if (col.count("lh_sphere_reg") && !get("lh_sphere_reg").empty()) s.lh_sphere_reg = file("lh_sphere_reg");
+    if (col.count("rh_sphere_reg") && !get("rh_sphere_reg").empty()) s.rh_sphere_reg = file("rh_sphere_reg");
     subjects.push_back(std::move(s));
   }
   if (subjects.empty()) throw InputError(path + ": no subjects listed");

@@ -317,6 +317,13 @@ BoundaryCoordinates rectangle_boundary_coordinates(const MatrixXd& V, std::vecto
     s[0] = opt.anchor_position - P * best_t * (row3(V, loop[1]) - row3(V, loop[0])).norm() / total;
   }
   for (int i = 0; i < nb; ++i) s[i + 1] = s[i] + P * (row3(V, loop[(i + 1) % nb]) - row3(V, loop[i])).norm() / total;
+  if (!opt.boundary_perimeter.empty()) {  // given coordinates instead of arc length
+    s[0] = opt.boundary_perimeter[static_cast<std::size_t>(loop[0])];
+    for (int i = 0; i + 1 < nb; ++i)
+      s[i + 1] = s[i] + wrap_rectangle_perimeter(opt.boundary_perimeter[static_cast<std::size_t>(loop[i + 1])] -
+                                                     opt.boundary_perimeter[static_cast<std::size_t>(loop[i])],
+                                                 opt.width);
+  }
   s[nb] = s[0] + P;  // exact closure
   return {std::move(loop), std::move(s)};
 }

@@ -73,6 +73,10 @@ struct RectangleBoundaryMap {
   // Resolve dividing edges (step 3) by edge flips where the quad allows it, so the map keeps the
   // input's vertex list; only the rest are split. false: split every one (Zou et al. 2011).
   bool flip_dividing_edges = true;
+  // Optional (#V, NaN off the boundary): perimeter coordinates of the boundary vertices, increasing
+  // once around the loop, used instead of arc length and the anchor (a boundary that follows a
+  // starting map, core/atlas_map.h boundary_perimeter_from_map).
+  std::vector<double> boundary_perimeter;
 };
 
 struct ConformalMapResult {

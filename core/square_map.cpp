@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 
+#include "core/atlas_map.h"
 #include "core/error.h"
 #include "core/sparse_cholesky.h"
 #include "core/stretch_energy.h"
@@ -163,6 +164,15 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   if (opt.stretch_start) b.fallback = HarmonicWeights::ClampedCotangent;
   b.try_cotangent = !opt.stretch_start || opt.cotangent_start;
   if (opt.anatomical_anchor) R.anterior_vertex = anterior_boundary_anchor(V, F, b);
+  const bool given_start = opt.start_uv.rows() > 0;
+  if (given_start) {
+    b.boundary_perimeter = boundary_perimeter_from_map(opt.start_uv, F, static_cast<int>(V.rows()), opt.width);
+    if (opt.start_uv.rows() != V.rows() || opt.start_uv.cols() != 2)
+      throw InputError("start map: " + std::to_string(opt.start_uv.rows()) + " rows for " + std::to_string(V.rows()) +
+                       " vertices; give one 2D position per surface vertex");
+    b.try_cotangent = false;  // the interior is replaced by the given start
+    b.fallback = HarmonicWeights::ClampedCotangent;
+  }
   report(progress, "initial", -1, "conformal map");
   SpdSolver solver;  // one analysis for the conformal map's systems and the stretch-energy steps
   ConformalMapResult init = conformal_rectangle_map(V, F, b, &solver);
@@ -178,7 +188,11 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   fo.width = opt.width;
   if (opt.density.size() > 0) fo.density = extend_to_inserted(opt.density, init).col(0);
   MatrixXd start = init.UV;
-  if (opt.stretch_start) {
+  if (given_start) {
+    start = start_from_map(init, opt.start_uv, &R.start_repaired);
+    init.UV = start;
+    report(progress, "initial", -1, "given start: " + std::to_string(R.start_repaired) + " vertices re-placed to unfold it");
+  } else if (opt.stretch_start) {
     report(progress, "stretch", -1, "stretch-energy start");
     const VectorXd target = target_face_measure(init.V, init.F, fo.density, opt.width);
     start = stretch_energy_map(init.V, init.F, target, init.UV, init.side_mask, opt.width, opt.stretch, &R.stretch, &solver);

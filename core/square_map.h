@@ -59,6 +59,11 @@ struct SquareMapOptions {
   // least from the conformal start (lower angle distortion).
   bool optimal_transport = false;
   OptimalTransportOptions transport;
+  // Optional starting map (#V x 2 in [0, W] x [0, 1] for the region's vertices; e.g. an atlas map
+  // carried through a sphere registration, core/atlas_map.h): the boundary follows it instead of
+  // arc length and the anchor, the interior starts at it (no stretch-energy start), and the flow
+  // makes it authalic. UV_initial is then this start.
+  MatrixXd start_uv;
 };
 
 struct SquareMapResult {
@@ -80,6 +85,7 @@ struct SquareMapResult {
   // transport holds its report (initial_cost: the unrefined map's cost) and flow the final flow's.
   double transport_cost = 0;
   OptimalTransportReport transport;
+  int start_repaired = 0;    // with start_uv: vertices re-placed to unfold the start
   int flips = 0;             // flipped or degenerate faces of UV (0 unless something failed)
 };
 

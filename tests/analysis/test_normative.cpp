@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "analysis/normative.h"
 #include "common/test_data.h"
@@ -364,6 +365,56 @@ TEST(Normative, BuildFromFilesStreamsAndIsThreadIndependent) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("s7_elements.csv:1: unexpected header"), std::string::npos) << e.what();
   }
+}
+
+}  // namespace
+}  // namespace authalic::analysis
+
+namespace authalic::analysis {
+namespace {
+
+// Issue 14: element (i, j) covers other anatomy in another correspondence mode or atlas, so a
+// reference records its mode (and keeps it through its file) and refuses tables of another.
+TEST(NormativeCorrespondence, ReferenceRecordsTheModeAndRefusesAnother) {
+  const int k = 4;
+  std::vector<ElementTable> controls;
+  for (int s = 0; s < 3; ++s) {
+    std::vector<double> v(16);
+    for (int e = 0; e < 16; ++e) v[static_cast<std::size_t>(e)] = 1.0 + 0.1 * noise(s, e);
+    controls.push_back(make_table(Domain::square(), k, {"left"}, "c" + std::to_string(s), v));
+    controls.back().metadata["correspondence"] = "atlas 0123456789abcdef";
+  }
+  NormativeReference ref = empty_reference_like(controls[0]);
+  for (const auto& t : controls) add_subject(ref, t, t.subject_id);
+  EXPECT_EQ(ref.correspondence, "atlas 0123456789abcdef");
+  const NormativeReference back = reference_from_json(reference_to_json(ref), "ref.json");
+  EXPECT_EQ(back.correspondence, "atlas 0123456789abcdef");
+
+  ElementTable patient = controls[0];
+  patient.subject_id = "p";
+  EXPECT_NO_THROW(compare_to_reference(back, patient));
+  for (const std::string& mode : {std::string(""), std::string("atlas fedcba9876543210")}) {
+    if (mode.empty())
+      patient.metadata.erase("correspondence");  // a table without the key: per-subject (before issue 14)
+    else
+      patient.metadata["correspondence"] = mode;
+    try {
+      compare_to_reference(back, patient);
+      ADD_FAILURE() << "a patient in mode '" << mode << "' was compared";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("element correspondence is '" + (mode.empty() ? std::string("per-subject") : mode) + "'"),
+                std::string::npos) << what;
+      EXPECT_NE(what.find("atlas 0123456789abcdef"), std::string::npos) << what;
+    }
+    ElementTable other = patient;
+    other.subject_id = "c9";
+    EXPECT_THROW(add_subject(ref, other, "c9"), InputError);
+  }
+  // References written before issue 14 have no key: per-subject.
+  nlohmann::json j = nlohmann::json::parse(reference_to_json(ref));
+  j.erase("correspondence");
+  EXPECT_EQ(reference_from_json(j.dump(), "old.json").correspondence, "per-subject");
 }
 
 }  // namespace
