@@ -166,14 +166,7 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
       *uy = (mask & (kSideBottom | kSideTop)) ? 0.0 : vy(px, py) * s;
     };
     for (int k = 0; k < rk4_steps; ++k) {
-      const double t = k * dt;
-      double k1x, k1y, k2x, k2y, k3x, k3y, k4x, k4y;
-      vel(t, x, y, &k1x, &k1y);
-      vel(t + 0.5 * dt, x + 0.5 * dt * k1x, y + 0.5 * dt * k1y, &k2x, &k2y);
-      vel(t + 0.5 * dt, x + 0.5 * dt * k2x, y + 0.5 * dt * k2y, &k3x, &k3y);
-      vel(t + dt, x + dt * k3x, y + dt * k3y, &k4x, &k4y);
-      x += dt / 6.0 * (k1x + 2 * k2x + 2 * k3x + k4x);
-      y += dt / 6.0 * (k1y + 2 * k2y + 2 * k3y + k4y);
+      rk4_step(vel, k * dt, dt, x, y);
       constrain_to_rectangle(x, y, mask, width);
     }
     out(v, 0) = x;

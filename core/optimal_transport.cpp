@@ -68,20 +68,14 @@ MatrixXd follow_field(const MatrixXd& UV, const MatrixXd& wx, const MatrixXd& wy
   for (Eigen::Index v = 0; v < UV.rows(); ++v) {
     if (!used[v]) continue;
     const int mask = side_mask.size() ? side_mask[v] : 0;
-    auto vel = [&](double px, double py, double* ux, double* uy) {
+    auto vel = [&](double /*t: the field is frozen*/, double px, double py, double* ux, double* uy) {
       constrain_to_rectangle(px, py, mask, width);
       *ux = (mask & (kSideLeft | kSideRight)) ? 0.0 : ix(px, py);
       *uy = (mask & (kSideBottom | kSideTop)) ? 0.0 : iy(px, py);
     };
     double x = UV(v, 0), y = UV(v, 1);
     for (int k = 0; k < kFieldSubsteps; ++k) {
-      double k1x, k1y, k2x, k2y, k3x, k3y, k4x, k4y;
-      vel(x, y, &k1x, &k1y);
-      vel(x + 0.5 * dt * k1x, y + 0.5 * dt * k1y, &k2x, &k2y);
-      vel(x + 0.5 * dt * k2x, y + 0.5 * dt * k2y, &k3x, &k3y);
-      vel(x + dt * k3x, y + dt * k3y, &k4x, &k4y);
-      x += dt / 6.0 * (k1x + 2 * k2x + 2 * k3x + k4x);
-      y += dt / 6.0 * (k1y + 2 * k2y + 2 * k3y + k4y);
+      rk4_step(vel, k * dt, dt, x, y);
       constrain_to_rectangle(x, y, mask, width);
     }
     out(v, 0) = x;

@@ -102,4 +102,18 @@ struct GridBilinear {
   }
 };
 
+// One classical Runge-Kutta (RK4) step of the planar ODE d(x, y)/dt = vel(t, x, y) from t to
+// t + dt; vel(t, x, y, &ux, &uy) writes the velocity. Used to follow the grid velocity fields of
+// the flows (core/authalic_flow.h, core/optimal_transport.h).
+template <class Velocity>
+inline void rk4_step(const Velocity& vel, double t, double dt, double& x, double& y) {
+  double k1x, k1y, k2x, k2y, k3x, k3y, k4x, k4y;
+  vel(t, x, y, &k1x, &k1y);
+  vel(t + 0.5 * dt, x + 0.5 * dt * k1x, y + 0.5 * dt * k1y, &k2x, &k2y);
+  vel(t + 0.5 * dt, x + 0.5 * dt * k2x, y + 0.5 * dt * k2y, &k3x, &k3y);
+  vel(t + dt, x + dt * k3x, y + dt * k3y, &k4x, &k4y);
+  x += dt / 6.0 * (k1x + 2 * k2x + 2 * k3x + k4x);
+  y += dt / 6.0 * (k1y + 2 * k2y + 2 * k3y + k4y);
+}
+
 }  // namespace authalic
