@@ -18,8 +18,13 @@ set(launcher)
 if(DEFINED ENV{CMAKE_CXX_COMPILER_LAUNCHER})
   set(launcher -DCMAKE_CXX_COMPILER_LAUNCHER=$ENV{CMAKE_CXX_COMPILER_LAUNCHER})
 endif()
+# A core built with the sanitizers (scripts/sanitize.sh) needs their runtime in the consumer too.
+set(sanitize_flags)
+if(SANITIZE)
+  set(sanitize_flags "-DCMAKE_CXX_FLAGS=-fsanitize=address,undefined" "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined")
+endif()
 step("configure" ${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/consumer -B ${WORK_DIR}/build -G ${GENERATOR}
-     -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix ${launcher})
+     -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix ${launcher} ${sanitize_flags})
 step("build" ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 # Passive OpenMP waiting, as the authalic executable sets for itself: on a loaded machine spinning
 # threads slow a small map down by orders of magnitude.
