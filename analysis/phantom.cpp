@@ -723,77 +723,54 @@ std::string cohort_csv_text(const std::vector<PhantomSubject>& subjects, bool va
   return csv.str();
 }
 
-}  // namespace
-
-PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& options, const ProgressFn& progress) {
-  if (options.controls < 0 || options.patients < 0 || options.controls + options.patients == 0) {
-    throw InputError("phantom: need at least one subject (--controls N, --patients N, N >= 0)");
-  }
-  if (options.controls > 2000 || options.patients > 2000) throw InputError("phantom: at most 2000 controls and 2000 patients");
-  const std::string out = fs::absolute(out_dir).lexically_normal().string();
-  std::error_code ec;
-  for (const char* sub : {"", "/surf", "/label", "/truth"}) {
-    fs::create_directories(out + sub, ec);
-    if (ec) throw InputError(out + sub + ": cannot create the folder (" + ec.message() + "); choose a writable OUT_DIR");
-  }
-
-  // Anatomy and healthy PET.
-  PhantomResult result;
+// The phantom's template: the left hemisphere and the healthy PET, from the shared data
+// (fsaverage5 + SPM's PET) when present, else synthetic. Sets result.source.
+struct PhantomTemplate {
   Hemisphere left;
   io::Volume healthy;
-  const double reference = 8000.0;  // Bq/mL of grey matter in the synthetic model
-  const bool use_shared = !options.synthetic && !options.shared_dir.empty() &&
-                          fs::exists(options.shared_dir + "/fsaverage5/white_left.gii.gz") &&
-                          fs::exists(options.shared_dir + "/spm/PET.nii");
+  bool use_shared = false;
+};
+
+PhantomTemplate phantom_template(const PhantomOptions& options, const ProgressFn& progress, PhantomResult& result) {
+  PhantomTemplate t;
+  t.use_shared = !options.synthetic && !options.shared_dir.empty() &&
+                 fs::exists(options.shared_dir + "/fsaverage5/white_left.gii.gz") && fs::exists(options.shared_dir + "/spm/PET.nii");
   report(progress, "phantom", 0.0, "anatomy");
-  if (use_shared) {
+  if (t.use_shared) {
     const std::string d = options.shared_dir;
     const io::Surface white = io::read_surface(d + "/fsaverage5/white_left.gii.gz");
     const io::Surface pial = io::read_surface(d + "/fsaverage5/pial_left.gii.gz");
     const io::Surface flat = io::read_surface(d + "/fsaverage5/flat_left.gii.gz");
-    left.white = white.mesh;
-    left.pial = pial.mesh;
-    left.cortex = used_vertices(flat.mesh.F, white.mesh.num_vertices());
-    healthy = io::read_volume(d + "/spm/PET.nii");
+    t.left.white = white.mesh;
+    t.left.pial = pial.mesh;
+    t.left.cortex = used_vertices(flat.mesh.F, white.mesh.num_vertices());
+    t.healthy = io::read_volume(d + "/spm/PET.nii");
     // Scale the template so that its cortical level (the 90th percentile) is the reference.
     std::vector<float> finite;
-    for (float v : healthy.data) {
+    for (float v : t.healthy.data) {
       if (std::isfinite(v) && v > 0) finite.push_back(v);
     }
     if (finite.empty()) throw InputError(d + "/spm/PET.nii: no positive values; is it a PET image?");
     std::nth_element(finite.begin(), finite.begin() + finite.size() * 9 / 10, finite.end());
     const double p90 = finite[finite.size() * 9 / 10];
-    for (float& v : healthy.data) v = std::isfinite(v) ? static_cast<float>(v / p90) : 0.0f;
+    for (float& v : t.healthy.data) v = std::isfinite(v) ? static_cast<float>(v / p90) : 0.0f;
     result.source = "shared: fsaverage5 white/pial_left (cortex = flat_left faces) + spm/PET.nii";
   } else {
-    left = synthetic_left_hemisphere(options.synthetic_options);
+    t.left = synthetic_left_hemisphere(options.synthetic_options);
     report(progress, "phantom", 0.02, "healthy PET model");
-    healthy = synthetic_pet_template(left, options.synthetic_options, options.voxel_mm);
+    t.healthy = synthetic_pet_template(t.left, options.synthetic_options, options.voxel_mm);
     result.source = "synthetic";
   }
-  const Hemisphere right = mirror_hemisphere(left);
-  result.region = plant_region(left, default_region_target(!use_shared, options.synthetic_options), options.region_radius_mm,
-                               options.region_depth);
-  {
-    const VectorXd areas = barycentric_vertex_areas(left.white.V, left.white.F);
-    for (int v = 0; v < areas.size(); ++v) result.region_area_mm2 += result.region.left_mask[v] ? areas(v) : 0.0;
-  }
-  report(progress, "phantom", 0.05, "planted region");
-  const std::vector<float> multiplier = region_multiplier(healthy, left, right, result.region);
+  return t;
+}
 
-  write_hemisphere_files(out, left, result.region, "lh");
-  write_hemisphere_files(out, right, result.region, "rh");
-  VariabilityTemplate variability;
-  if (options.anatomical_variability) {
-    if (!use_shared)
-      throw InputError("phantom --anatomical-variability: needs the fsaverage5 template and spm/PET.nii of --shared "
-                       "(../shared/data); give --shared DIR");
-    report(progress, "phantom", 0.06, "atlas (the template) and its maps");
-    variability = write_atlas_folder(out, options.shared_dir, left, right, result.region);
-  }
+// The cohort's subjects: each one's age, effects and PET (the patients' with the planted region),
+// drawn in order from the seed's stream and written to sub-<id>/.
+void write_subjects(const std::string& out, const PhantomOptions& options, const PhantomTemplate& t,
+                    const VariabilityTemplate& variability, const std::vector<float>& multiplier, double reference,
+                    const ProgressFn& progress, PhantomResult& result) {
+  std::error_code ec;
   PhantomRng anatomy_rng(options.seed ^ 0x9e3779b97f4a7c15ULL);  // its own stream: the PET draws stay as without
-
-  // Subjects.
   PhantomRng rng(options.seed);
   const int total = options.controls + options.patients;
   for (int s = 0; s < total; ++s) {
@@ -808,25 +785,22 @@ PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& op
     fs::create_directories(out + "/sub-" + subj.id, ec);
     const std::vector<float> lesion = patient ? multiplier : std::vector<float>{};
     const io::Volume pet = options.anatomical_variability
-                               ? variant_subject_pet(out + "/sub-" + subj.id, left, variability, result.region, options,
-                                                     anatomy_rng, healthy, subj.effects, lesion, reference)
-                               : subject_pet(healthy, subj.effects, lesion, reference);
+                               ? variant_subject_pet(out + "/sub-" + subj.id, t.left, variability, result.region, options,
+                                                     anatomy_rng, t.healthy, subj.effects, lesion, reference)
+                               : subject_pet(t.healthy, subj.effects, lesion, reference);
     if (ec) throw InputError(out + "/sub-" + subj.id + ": cannot create the folder (" + ec.message() + ")");
     io::write_nifti(out + "/" + subj.pet, pet,
                     "authalic phantom " + subj.role + (patient ? " (planted -" + csv_number(100 * options.region_depth) + "%)" : ""));
     result.subjects.push_back(subj);
   }
+}
 
-  // Cohort table, region description, generator record.
-  std::ostringstream csv;
-  csv << cohort_csv_text(result.subjects, options.anatomical_variability);
-  result.cohort_csv = out + "/cohort.csv";
-  io::write_file_atomically(result.cohort_csv, csv.str());
-
+// truth/lesion.json: where the planted region is and how it was planted.
+nlohmann::json lesion_json(const PhantomResult& result, const Hemisphere& left) {
   const auto& region = result.region;
   int region_vertices = 0;
   for (bool b : region.left_mask) region_vertices += b;
-  const nlohmann::json lesion = {
+  return {
       {"description", "planted hypometabolic region of the patients: PET multiplied by (1 - depth) in every voxel within "
                       "column_depth_mm of the cortical surface whose nearest white/pial vertex is in the region, and in "
                       "every voxel within 3 mm of a region vertex's inward normal segment (pial + 2 mm to pial - 20 mm); "
@@ -842,8 +816,11 @@ PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& op
       {"area_mm2_white_per_hemisphere", result.region_area_mm2},
       {"masks", {{"lh", "truth/lh.lesion.label.gii"}, {"rh", "truth/rh.lesion.label.gii"}}},
   };
-  io::write_file_atomically(out + "/truth/lesion.json", lesion.dump(2) + "\n");
+}
 
+// phantom.json: the generator record (seed, model, and each subject's drawn effects).
+nlohmann::json phantom_record_json(const PhantomOptions& options, const PhantomResult& result, const PhantomTemplate& t,
+                                   double reference, const nlohmann::json& lesion) {
   nlohmann::json subjects = nlohmann::json::array();
   for (const auto& s : result.subjects) {
     const auto& e = s.effects;
@@ -860,7 +837,7 @@ PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& op
                         {"noise_fraction", e.noise_fraction},
                         {"fwhm_mm", e.fwhm_mm}});
   }
-  const nlohmann::json record = {
+  return {
       {"generator", std::string("authalic phantom ") + kVersion},
       {"seed", options.seed},
       {"source", result.source},
@@ -876,7 +853,7 @@ PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& op
       {"patients", options.patients},
       {"pet_units", "Bq/mL"},
       {"grey_matter_reference_bq_per_ml", reference},
-      {"voxel_mm", use_shared ? healthy.voxel_size().x() : options.voxel_mm},
+      {"voxel_mm", t.use_shared ? t.healthy.voxel_size().x() : options.voxel_mm},
       {"model", "PET = healthy x global_scale x (1 + field_amplitude cos(k.x + phase)) x (1 + parcel_amplitude U(-1,1) "
                 "per parcel_mm cube) x lesion, + noise "
                 "(SD = noise_fraction sqrt(value x reference)), then Gaussian blur (fwhm_mm); rounded to 1 Bq/mL; 0 outside the head"},
@@ -884,8 +861,59 @@ PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& op
       {"lesion", lesion},
       {"subjects", subjects},
   };
+}
+
+}  // namespace
+
+PhantomResult write_phantom(const std::string& out_dir, const PhantomOptions& options, const ProgressFn& progress) {
+  if (options.controls < 0 || options.patients < 0 || options.controls + options.patients == 0) {
+    throw InputError("phantom: need at least one subject (--controls N, --patients N, N >= 0)");
+  }
+  if (options.controls > 2000 || options.patients > 2000) throw InputError("phantom: at most 2000 controls and 2000 patients");
+  const std::string out = fs::absolute(out_dir).lexically_normal().string();
+  std::error_code ec;
+  for (const char* sub : {"", "/surf", "/label", "/truth"}) {
+    fs::create_directories(out + sub, ec);
+    if (ec) throw InputError(out + sub + ": cannot create the folder (" + ec.message() + "); choose a writable OUT_DIR");
+  }
+
+  // Anatomy and healthy PET.
+  PhantomResult result;
+  const double reference = 8000.0;  // Bq/mL of grey matter in the synthetic model
+  const PhantomTemplate t = phantom_template(options, progress, result);
+  const Hemisphere& left = t.left;
+  const Hemisphere right = mirror_hemisphere(left);
+  result.region = plant_region(left, default_region_target(!t.use_shared, options.synthetic_options), options.region_radius_mm,
+                               options.region_depth);
+  {
+    const VectorXd areas = barycentric_vertex_areas(left.white.V, left.white.F);
+    for (int v = 0; v < areas.size(); ++v) result.region_area_mm2 += result.region.left_mask[v] ? areas(v) : 0.0;
+  }
+  report(progress, "phantom", 0.05, "planted region");
+  const std::vector<float> multiplier = region_multiplier(t.healthy, left, right, result.region);
+
+  write_hemisphere_files(out, left, result.region, "lh");
+  write_hemisphere_files(out, right, result.region, "rh");
+  VariabilityTemplate variability;
+  if (options.anatomical_variability) {
+    if (!t.use_shared)
+      throw InputError("phantom --anatomical-variability: needs the fsaverage5 template and spm/PET.nii of --shared "
+                       "(../shared/data); give --shared DIR");
+    report(progress, "phantom", 0.06, "atlas (the template) and its maps");
+    variability = write_atlas_folder(out, options.shared_dir, left, right, result.region);
+  }
+  write_subjects(out, options, t, variability, multiplier, reference, progress, result);
+
+  // Cohort table, region description, generator record.
+  std::ostringstream csv;
+  csv << cohort_csv_text(result.subjects, options.anatomical_variability);
+  result.cohort_csv = out + "/cohort.csv";
+  io::write_file_atomically(result.cohort_csv, csv.str());
+  const nlohmann::json lesion = lesion_json(result, left);
+  io::write_file_atomically(out + "/truth/lesion.json", lesion.dump(2) + "\n");
+  const nlohmann::json record = phantom_record_json(options, result, t, reference, lesion);
   io::write_file_atomically(out + "/phantom.json", record.dump(2) + "\n");
-  report(progress, "phantom", 1.0, std::to_string(total) + " subjects");
+  report(progress, "phantom", 1.0, std::to_string(options.controls + options.patients) + " subjects");
   return result;
 }
 

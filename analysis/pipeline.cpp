@@ -591,28 +591,23 @@ void default_annotations(SubjectInputs& in) {
   if (in.rh_annot.empty()) in.rh_annot = beside(in.rh_cortex, "rh.aparc.annot");
 }
 
-RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const ProgressFn& progress) {
-  check_id(in.id);
-  if (options.out_dir.empty()) throw InputError("--out: no output folder given");
-  const fs::path final_dir = fs::path(options.out_dir) / ("sub-" + in.id);
-  io::check_inputs_outside({in.lh_white, in.lh_pial, in.rh_white, in.rh_pial, in.lh_cortex, in.rh_cortex, in.pet, in.t1, in.normative,
-                            in.lh_annot, in.rh_annot, in.lh_sphere_reg, in.rh_sphere_reg},
-                           final_dir.string(), options.force ? "--force would replace" : "is the subject's output folder");
-  const OutFolder out_folder(options.out_dir);
-  // The whole run holds the subject's lock: a second run on the same OUT/sub-<id> is refused
-  // instead of racing this one to the final rename.
-  const io::LockFile lock((fs::path(options.out_dir) / (".sub-" + in.id + ".lock")).string(), final_dir.string());
-  remove_dead_staging(options.out_dir, in.id);
-  if (fs::exists(final_dir) && !options.force)
-    throw InputError(final_dir.string() + ": output folder exists; pass --force to replace it or choose another --out");
+namespace {
 
-  RunSummary summary;
-  StepLog log(progress);
-  const SubjectFiles names{in.id};
+// Everything read in step 1 besides the hemispheres: the PET, the reference (if any), the
+// reference-region mask (if any) and the inputs' checksums for the sidecars.
+struct LoadedInputs {
+  io::Volume pet;
+  NormativeReference reference;
+  bool compare = false;
+  std::unique_ptr<io::Volume> mask;
+  json checksums;
+};
 
-  // 1. Inputs: everything is read and checked before anything is written.
+// Step 1. Everything is read and checked before anything is written, so bad input fails fast
+// and leaves nothing behind.
+LoadedInputs load_and_check_inputs(Hemisphere (&hemis)[2], const SubjectInputs& in, const RunOptions& options, StepLog& log,
+                                   RunSummary& summary) {
   log.begin("load and check inputs");
-  Hemisphere hemis[2];
   hemis[0].name = "left";
   hemis[0].tag = "L";
   hemis[1].name = "right";
@@ -625,25 +620,26 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   check_anatomy(hemis, in);
   hemis[0].regions = hemisphere_regions(hemis[0], in.lh_annot);
   hemis[1].regions = hemisphere_regions(hemis[1], in.rh_annot);
+  LoadedInputs r;
   io::VolumeReadOptions pet_options;
   pet_options.frame = options.pet_frame;
   pet_options.sum_frames = options.pet_sum_frames;
-  const io::Volume pet = io::read_volume(in.pet, pet_options);
-  NormativeReference reference;
-  const bool compare = !in.normative.empty();
-  if (compare) reference = read_reference(in.normative);
+  r.pet = io::read_volume(in.pet, pet_options);
+  r.compare = !in.normative.empty();
+  if (r.compare) r.reference = read_reference(in.normative);
   // Refused before any map is computed; without --require-age the comparison says so (step 5).
-  if (compare && reference.age_model && !(in.age > 0) && options.require_age)
+  if (r.compare && r.reference.age_model && !(in.age > 0) && options.require_age)
     throw InputError(in.normative + ": the reference has an age model but no --age was given; give --age YEARS, or drop "
                                     "--require-age to compare without age adjustment");
-  std::unique_ptr<io::Volume> mask;
-  if (options.normalize != "none" && options.normalize != "global") mask = std::make_unique<io::Volume>(io::read_volume(options.normalize));
-  const json checksums = input_checksums(in);
+  if (options.normalize != "none" && options.normalize != "global") r.mask = std::make_unique<io::Volume>(io::read_volume(options.normalize));
+  r.checksums = input_checksums(in);
   log.end(summary);
+  return r;
+}
 
-  // 2. Authalic square map per hemisphere (in atlas correspondence when possible).
-  const std::string correspondence =
-      correspondence_step(hemis, in, options, compare ? &reference : nullptr, log, summary, progress);
+// Step 2. The authalic square map per hemisphere, each accepted (exit 3) before it is used.
+void map_hemispheres(Hemisphere (&hemis)[2], const SubjectInputs& in, const RunOptions& options, StepLog& log,
+                     RunSummary& summary, const ProgressFn& progress) {
   for (Hemisphere& h : hemis) {
     log.begin("authalic square map (" + h.name + ")");
     log.note(map_hemisphere(h, progress));
@@ -654,20 +650,13 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
                      options.k == 32 ? nullptr : &h.map.V, h.map.UV, h.map.F, Domain::square());
     log.end(summary);
   }
+}
 
-  // 2b. The whole brain on the 2:1 rectangle.
-  HemisphereRectangles rect;
-  MapMetrics rect_metrics;
-  if (options.rectangle) rect_metrics = rectangle_step(hemis, options, log, summary, rect);
-
-  // 3. PET by normal projection from the pial surface inward (Zou et al. 2011, section 5.2).
-  log.begin("PET sampling");
-  SamplingOptions so;
-  so.depth_mm = options.depth_mm;
-  // With a T1, the PET is first registered to it (rigid, Mattes MI): surfaces are in the T1's
-  // scanner RAS, so they reach the PET's world coordinates through the registration.
+// With a T1, the PET is first registered to it (rigid, Mattes MI): surfaces are in the T1's
+// scanner RAS, so they reach the PET's world coordinates through the registration. Returns the
+// T1 -> PET transform (identity without a T1) and sets `registration` to the log's line about it.
+Eigen::Matrix4d register_pet_to_t1(const SubjectInputs& in, const io::Volume& pet, StepLog& log, std::string& registration) {
   Eigen::Matrix4d t1_to_pet = Eigen::Matrix4d::Identity();
-  std::string registration;  // for the report's quality flags
   if (!in.t1.empty()) {
     const io::RigidRegistration reg = io::register_rigid(io::read_volume(in.t1), pet);
     t1_to_pet = reg.t1_to_pet;
@@ -677,11 +666,13 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     log.note(m.str());
     registration = m.str();
   }
-  for (Hemisphere& h : hemis) {
-    const MatrixXd Vw = transform_points(t1_to_pet * h.pial.to_scanner, h.pial.mesh.V);
-    h.sampling = sample_normal_projection(pet, Vw, h.pial.mesh.F, so);
-    h.pet = h.sampling.values;
-  }
+  return t1_to_pet;
+}
+
+// The subject's normalisation: the global cortical mean of both hemispheres together, or the
+// mean over a reference-region mask, or none.
+Normalisation subject_normalisation(const Hemisphere (&hemis)[2], const SubjectInputs& in, const RunOptions& options,
+                                    const io::Volume& pet, const io::Volume* mask) {
   Normalisation norm;
   if (options.normalize == "global") {
     // Both hemispheres' cortex together: one global mean for the subject.
@@ -700,16 +691,37 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   } else if (mask) {
     norm = reference_region_mean(pet, *mask);
   }
+  return norm;
+}
+
+// Step 3. PET by normal projection from the pial surface inward (Zou et al. 2011, section 5.2),
+// then normalised. Sets `registration` for the report's quality flags.
+Normalisation sample_and_normalise(Hemisphere (&hemis)[2], const SubjectInputs& in, const RunOptions& options,
+                                   const LoadedInputs& inputs, StepLog& log, RunSummary& summary, std::string& registration) {
+  log.begin("PET sampling");
+  SamplingOptions so;
+  so.depth_mm = options.depth_mm;
+  const Eigen::Matrix4d t1_to_pet = register_pet_to_t1(in, inputs.pet, log, registration);
+  for (Hemisphere& h : hemis) {
+    const MatrixXd Vw = transform_points(t1_to_pet * h.pial.to_scanner, h.pial.mesh.V);
+    h.sampling = sample_normal_projection(inputs.pet, Vw, h.pial.mesh.F, so);
+    h.pet = h.sampling.values;
+  }
+  const Normalisation norm = subject_normalisation(hemis, in, options, inputs.pet, inputs.mask.get());
   for (Hemisphere& h : hemis) apply_normalisation(h.pet, norm);
   log.note(hemis[0].sampling.method + "; normalisation: " + (norm.description.empty() ? "none" : norm.description));
   log.end(summary);
+  return norm;
+}
 
-  // 4. Equal-area elements.
+// Step 4. Equal-area elements of both hemispheres, as one table.
+ElementTable elements_step(Hemisphere (&hemis)[2], const SubjectInputs& in, const RunOptions& options, const Normalisation& norm,
+                           const std::string& pet_units, const std::string& correspondence, StepLog& log, RunSummary& summary) {
   log.begin("equal-area elements");
   ElementTable table;
   table.grid = element_grid(Domain::square(), options.k);
   table.normalisation = to_string(norm.kind);
-  table.units = norm.units.empty() ? pet.units : norm.units;
+  table.units = norm.units.empty() ? pet_units : norm.units;
   table.subject_id = in.id;
   table.age = in.age > 0 ? in.age : std::numeric_limits<double>::quiet_NaN();
   table.metadata["software"] = software_version();
@@ -723,204 +735,319 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
     table.blocks.push_back(h.elements.block);
   }
   log.end(summary);
+  return table;
+}
 
-  // 5. Comparison with the normative reference.
-  Comparison cmp;
-  if (compare) {
-    log.begin("normative comparison");
-    CompareOptions co;
-    co.reference_name = in.normative;
-    co.threshold = options.z_threshold;
-    co.rescale = options.rescale;
-    cmp = compare_to_reference(reference, table, co);
-    const int dropped = drop_small_clusters(cmp, options.min_cluster_elements);
-    if (dropped > 0)
-      log.note(std::to_string(dropped) + " clusters of fewer than " + std::to_string(options.min_cluster_elements) + " elements not reported");
-    for (const std::string& n : cmp.notes) log.note(n);
-    // z silently not age adjusted would read as adjusted (issue 15: up to 1.2 in z at 75 years).
-    if (reference.age_model && !cmp.age_adjusted)
-      summary.warnings.push_back("the reference " + in.normative +
-                                 " has an age model but the subject's age is unknown (--age): z-scores are NOT age adjusted");
-    for (const std::string& w : summary.warnings) log.note("warning: " + w);
-    summary.abnormal_elements = cmp.num_hypo + cmp.num_hyper;
-    summary.clusters = static_cast<int>(cmp.clusters.size());
-    summary.clusters_json = clusters_json(cmp.clusters);
-    log.end(summary);
+// Step 5. Comparison with the normative reference: z per element, clusters, warnings.
+Comparison compare_step(const NormativeReference& reference, const ElementTable& table, const SubjectInputs& in,
+                        const RunOptions& options, StepLog& log, RunSummary& summary) {
+  log.begin("normative comparison");
+  CompareOptions co;
+  co.reference_name = in.normative;
+  co.threshold = options.z_threshold;
+  co.rescale = options.rescale;
+  Comparison cmp = compare_to_reference(reference, table, co);
+  const int dropped = drop_small_clusters(cmp, options.min_cluster_elements);
+  if (dropped > 0)
+    log.note(std::to_string(dropped) + " clusters of fewer than " + std::to_string(options.min_cluster_elements) + " elements not reported");
+  for (const std::string& n : cmp.notes) log.note(n);
+  // z silently not age adjusted would read as adjusted (issue 15: up to 1.2 in z at 75 years).
+  if (reference.age_model && !cmp.age_adjusted)
+    summary.warnings.push_back("the reference " + in.normative +
+                               " has an age model but the subject's age is unknown (--age): z-scores are NOT age adjusted");
+  for (const std::string& w : summary.warnings) log.note("warning: " + w);
+  summary.abnormal_elements = cmp.num_hypo + cmp.num_hyper;
+  summary.clusters = static_cast<int>(cmp.clusters.size());
+  summary.clusters_json = clusters_json(cmp.clusters);
+  log.end(summary);
+  return cmp;
+}
+
+// One JSON sidecar per BIDS base name (x.nii.gz and x.png share x.json, which lists both); each
+// file added is also listed in the run's summary.
+class Sidecars {
+ public:
+  Sidecars(json common, RunSummary& summary) : common_(std::move(common)), summary_(summary) {}
+  void add(const std::string& file, const json& extra) {
+    const std::string base = file.substr(0, file.find('.'));
+    json& j = sidecars_[base];
+    if (j.is_null()) j = common_;
+    j["files"].push_back(file);
+    j.update(extra);
+    summary_.files.push_back(file);
+  }
+  void write(const fs::path& stage) const {
+    for (const auto& [base, j] : sidecars_) io::write_file_atomically((stage / (base + ".json")).string(), j.dump(2) + "\n");
   }
 
-  // 6. Outputs, staged in a hidden folder and renamed into place at the end.
+ private:
+  json common_;
+  RunSummary& summary_;
+  std::map<std::string, json> sidecars_;
+};
+
+// What every output-writing step shares: where files go, how they are named, their sidecars and
+// the Workbench spec (sub-<id>_workbench.spec: the files wb_view opens together).
+struct OutputSink {
+  const fs::path& stage;
+  const SubjectFiles& names;
+  Sidecars& sidecars;
+  std::vector<io::SpecEntry>& spec;
+};
+
+// The run's parameters as every sidecar records them.
+json run_parameters(const Hemisphere (&hemis)[2], const RunOptions& options, const Normalisation& norm, bool compare,
+                    const Comparison& cmp, const std::string& correspondence) {
+  return {{"k", options.k},
+          {"depth_mm", options.depth_mm},
+          {"sampling", hemis[0].sampling.method},
+          {"normalisation", norm.description.empty() ? "none" : norm.description},
+          {"z_threshold", options.z_threshold},
+          {"z_age_adjusted", compare && cmp.age_adjusted},
+          {"rescale_to_reference", options.rescale},
+          {"correspondence", correspondence}};
+}
+
+// The subject's white and pial surfaces and its flat map (scaled so 1 mm^2 flat = 1 mm^2 cortex
+// on average). Returns the flat map's write options, which the other per-hemisphere files reuse.
+io::SurfaceWriteOptions write_hemisphere_surfaces(const Hemisphere& h, const SubjectInputs& in, OutputSink& out) {
+  const double area = face_areas(h.map.V, h.map.F).sum();
+  TriMesh flat;
+  flat.V = MatrixXd::Zero(h.map.UV.rows(), 3);
+  flat.V.leftCols(2) = h.map.UV * std::sqrt(area);
+  flat.F = h.map.F;
+  io::SurfaceWriteOptions wo;
+  wo.anatomical_structure = h.left ? "CortexLeft" : "CortexRight";
+  wo.geometric_type = "Flat";
+  wo.metadata = {{"units", "mm"}, {"space", "authalic square map scaled to cortical area (mm^2 flat = mm^2 cortex)"}};
+  // The subject's own surfaces, which every per-vertex file below pairs with (Workbench spec).
+  for (const auto& [surface, kind, source] : {std::tuple<const io::Surface*, std::string, std::string>{&h.white, "white", h.left ? in.lh_white : in.rh_white},
+                                               {&h.pial, "pial", h.left ? in.lh_pial : in.rh_pial}}) {
+    const std::string name = out.names.surface(h.tag, kind);
+    write_anatomical_surface((out.stage / name).string(), *surface, wo.anatomical_structure, kind);
+    out.sidecars.add(name, {{"description", "the subject's " + kind + " surface in scanner RAS (mm), as read from " + source}});
+    out.spec.push_back({wo.anatomical_structure, "SURFACE", name});
+  }
+  const std::string flat_name = out.names.flat(h.tag);
+  io::write_surface((out.stage / flat_name).string(), flat, wo);
+  // Per-vertex files show on the flat map in Workbench when it has the surface's vertices: always,
+  // unless a dividing edge could not be flipped and was split (core/conformal_map.h, step 3).
+  if (flat.num_vertices() == h.white.mesh.num_vertices()) out.spec.push_back({wo.anatomical_structure, "SURFACE", flat_name});
+  out.sidecars.add(flat_name, {{"description", "authalic flat map; square side sqrt(cortical area) mm"},
+                               {"metrics", {{"flips", h.metrics.flips}, {"element_area_cv", h.metrics.element_cv}}}});
+  return wo;
+}
+
+// This hemisphere's part of the whole-brain 2:1 rectangle, in mm (the rectangle's area equals
+// both hemispheres' cortical area).
+void write_rectangle_part(const Hemisphere& h, const HemisphereRectangles& rect, const MapMetrics& rect_metrics,
+                          const RunOptions& options, const io::SurfaceWriteOptions& wo, OutputSink& out) {
+  const RectanglePart& part = h.left ? rect.left : rect.right;
+  const double total = face_areas(rect.left.V, rect.left.F).sum() + face_areas(rect.right.V, rect.right.F).sum();
+  TriMesh rflat;
+  rflat.V = MatrixXd::Zero(part.UV.rows(), 3);
+  rflat.V.leftCols(2) = part.UV * std::sqrt(total / 2.0);
+  rflat.F = part.F;
+  io::SurfaceWriteOptions ro = wo;
+  ro.metadata["space"] = "authalic whole-brain 2:1 rectangle scaled to the cortical area of both hemispheres (mm)";
+  ro.metadata[kSeamKey] = seam_text(rect.split);  // in [0, 2] units, as `rectangle` records it
+  const std::string rect_name = out.names.rectangle_flat(h.tag);
+  io::write_surface((out.stage / rect_name).string(), rflat, ro);
+  if (rflat.num_vertices() == h.white.mesh.num_vertices()) out.spec.push_back({wo.anatomical_structure, "SURFACE", rect_name});
+  out.sidecars.add(rect_name, {{"description", "this hemisphere's part of the whole-brain 2:1 rectangle (left part x in [0, w_L], "
+                                               "right part [w_L, 2] before scaling by sqrt(total cortical area / 2) mm)"},
+                               {"metrics", {{"flips", rect_metrics.flips}, {"element_area_cv", rect_metrics.element_cv},
+                                            {"element_grid", {2 * options.k, options.k}}, {"left_part_width", rect.split}}}});
+}
+
+// The hemisphere's PET per vertex, its element values (NIfTI and picture) and each vertex's element.
+void write_hemisphere_pet(const Hemisphere& h, const ElementTable& table, int K, const io::SurfaceWriteOptions& wo,
+                          OutputSink& out) {
+  io::FuncWriteOptions fo;
+  fo.column_names = {"pet"};
+  fo.anatomical_structure = wo.anatomical_structure;
+  fo.metadata = {{"normalisation", table.normalisation}, {"units", table.units}, {"sampling", h.sampling.method}};
+  const std::string pet_name = out.names.pet(h.tag);
+  io::write_per_vertex((out.stage / pet_name).string(), h.pet, fo);
+  out.spec.push_back({wo.anatomical_structure, "METRIC", pet_name});
+  out.sidecars.add(pet_name, {{"description", "PET per vertex (normal projection), normalised"}, {"units", table.units}});
+  const std::string img_name = out.names.pet_elements(h.tag, ".nii.gz");
+  write_element_nifti((out.stage / img_name).string(), element_image(h.elements.block, table.grid), table.grid, 1,
+                      mean_element_area(h.elements.block), ElementImageKind::kValues, "authalic PET elements " + h.name);
+  out.sidecars.add(img_name, {{"description", "element PET values, K x K (i = column, j = row from the bottom)"}, {"units", table.units},
+                              {"space", element_space_note(mean_element_area(h.elements.block))}});
+  ScalarColouring c;
+  const auto range = robust_range(h.pet);
+  c.vmin = range.first;
+  c.vmax = range.second;
+  c.label = table.units;
+  const std::string png_name = out.names.pet_elements(h.tag, ".png");
+  io::write_png((out.stage / png_name).string(),
+                render_element_grid(block_values(h.elements.block), K, K, c, 12, h.name + " PET elements"));
+  out.sidecars.add(png_name, {{"description", "element PET values"}});
+  const std::string labels_name = out.names.element_labels(h.tag);
+  write_element_labels((out.stage / labels_name).string(), h.elements, table.grid);
+  out.spec.push_back({wo.anatomical_structure, "LABEL", labels_name});
+  out.sidecars.add(labels_name, {{"description", "each vertex's equal-area element: key = element id + 1 (id = row x K + column), 0 = "
+                                                 "in no element; pairs with the white and pial surfaces (the input's vertices)"}});
+}
+
+// One hemisphere's z-scores: element NIfTI and picture, and per vertex.
+void write_hemisphere_zscores(const Hemisphere& h, const std::vector<double>& z, const Comparison& cmp, const ElementTable& table,
+                              int K, OutputSink& out) {
+  ElementBlock zb = h.elements.block;
+  for (std::size_t i = 0; i < zb.elements.size(); ++i) zb.elements[i].value = z[i];
+  const std::string zimg = out.names.zscore_elements(h.tag, ".nii.gz");
+  write_element_nifti((out.stage / zimg).string(), element_image(zb, table.grid), table.grid, 1, mean_element_area(zb),
+                      ElementImageKind::kZScore, "authalic z " + h.name);
+  out.sidecars.add(zimg, {{"description", "element z-scores, z = (factor x patient - reference mean) / (reference SD x sqrt(1 + 1/n)); "
+                                          "factor: the patient's rescaling to the reference over its normal elements (1 = none)"},
+                          {"space", element_space_note(mean_element_area(zb))},
+                          {"rescale_factor", cmp.scale},
+                          {"rescale_elements", cmp.scale_elements}});
+  ScalarColouring zc;
+  zc.colormap = "coolwarm";
+  zc.vmin = -4;
+  zc.vmax = 4;
+  zc.label = "z";
+  const std::string zpng = out.names.zscore_elements(h.tag, ".png");
+  io::write_png((out.stage / zpng).string(), render_element_grid(z, K, K, zc, 12, h.name + " z-scores"));
+  out.sidecars.add(zpng, {{"description", "element z-scores"}});
+  io::FuncWriteOptions zo;
+  zo.column_names = {"z"};
+  zo.anatomical_structure = h.left ? "CortexLeft" : "CortexRight";
+  zo.metadata = {{"description", "z of each vertex's equal-area element (NaN: in no element)"}, {"units", "z"}};
+  const std::string zfunc = out.names.zscore(h.tag);
+  io::write_per_vertex((out.stage / zfunc).string(), element_values_at_vertices(h.elements.vertex_element, z.data(),
+                                                                               static_cast<int>(z.size())), zo);
+  out.sidecars.add(zfunc, {{"description", "per-vertex z: the z of the vertex's element; pairs with the white and pial surfaces"}});
+  out.spec.push_back({zo.anatomical_structure, "METRIC", zfunc});
+}
+
+// Both hemispheres' z-scores and the clusters table.
+void write_comparison(const Hemisphere (&hemis)[2], const Comparison& cmp, const ElementTable& table, const RunOptions& options,
+                      OutputSink& out) {
+  for (int b = 0; b < 2; ++b) {
+    const std::vector<double> z(cmp.z.begin() + b * table.grid.num_elements(), cmp.z.begin() + (b + 1) * table.grid.num_elements());
+    write_hemisphere_zscores(hemis[b], z, cmp, table, options.k, out);
+  }
+  const std::string clusters_name = out.names.clusters();
+  io::write_file_atomically((out.stage / clusters_name).string(), clusters_tsv(cmp.clusters));
+  out.sidecars.add(clusters_name, clusters_tsv_sidecar(options.z_threshold));
+}
+
+// Everything a run computed, for the output steps.
+struct RunResults {
+  const HemisphereRectangles& rect;
+  const MapMetrics& rect_metrics;
+  const ElementTable& table;
+  const Comparison& cmp;
+  bool compare;
+  const json& params;
+  const json& checksums;
+};
+
+// Step 6. The data files, staged in a hidden folder (renamed into place at the end). Returns the stage.
+fs::path write_outputs(const Hemisphere (&hemis)[2], const SubjectInputs& in, const RunOptions& options, const SubjectFiles& names,
+                       const RunResults& r, StepLog& log, RunSummary& summary) {
   log.begin("write outputs");
   fs::create_directories(options.out_dir);
   const fs::path stage = fs::path(options.out_dir) / (".sub-" + in.id + ".partial-" + std::to_string(::getpid()));
   fs::remove_all(stage);
   fs::create_directories(stage);
-  json params = {{"k", options.k},
-                 {"depth_mm", options.depth_mm},
-                 {"sampling", hemis[0].sampling.method},
-                 {"normalisation", norm.description.empty() ? "none" : norm.description},
-                 {"z_threshold", options.z_threshold},
-                 {"z_age_adjusted", compare && cmp.age_adjusted},
-                 {"rescale_to_reference", options.rescale},
-                 {"correspondence", correspondence}};
   // The subject as BIDS participants.tsv describes one (null: not given).
   const json participant = {{"participant_id", "sub-" + in.id},
                             {"age", in.age > 0 ? json(in.age) : json(nullptr)},
                             {"sex", in.sex.empty() ? json(nullptr) : json(in.sex)}};
-  // One JSON sidecar per BIDS base name (x.nii.gz and x.png share x.json, which lists both).
-  std::map<std::string, json> sidecars;
-  auto sidecar = [&](const std::string& file, const json& extra) {
-    const std::string base = file.substr(0, file.find('.'));
-    json& j = sidecars[base];
-    if (j.is_null()) {
-      j = {{"software", software_version()}, {"parameters", params}, {"inputs", checksums}, {"participant", participant}};
-      if (!options.command_line.empty()) j["command_line"] = options.command_line;
-    }
-    j["files"].push_back(file);
-    j.update(extra);
-    summary.files.push_back(file);
-  };
-  const int K = options.k;
-  std::vector<io::SpecEntry> spec;  // sub-<id>_workbench.spec: the files wb_view opens together
-  for (Hemisphere& h : hemis) {
-    // Flat map scaled so 1 mm^2 flat = 1 mm^2 cortex (on average).
-    const double area = face_areas(h.map.V, h.map.F).sum();
-    TriMesh flat;
-    flat.V = MatrixXd::Zero(h.map.UV.rows(), 3);
-    flat.V.leftCols(2) = h.map.UV * std::sqrt(area);
-    flat.F = h.map.F;
-    io::SurfaceWriteOptions wo;
-    wo.anatomical_structure = h.left ? "CortexLeft" : "CortexRight";
-    wo.geometric_type = "Flat";
-    wo.metadata = {{"units", "mm"}, {"space", "authalic square map scaled to cortical area (mm^2 flat = mm^2 cortex)"}};
-    // The subject's own surfaces, which every per-vertex file below pairs with (Workbench spec).
-    for (const auto& [surface, kind, source] : {std::tuple<const io::Surface*, std::string, std::string>{&h.white, "white", h.left ? in.lh_white : in.rh_white},
-                                                 {&h.pial, "pial", h.left ? in.lh_pial : in.rh_pial}}) {
-      const std::string name = names.surface(h.tag, kind);
-      write_anatomical_surface((stage / name).string(), *surface, wo.anatomical_structure, kind);
-      sidecar(name, {{"description", "the subject's " + kind + " surface in scanner RAS (mm), as read from " + source}});
-      spec.push_back({wo.anatomical_structure, "SURFACE", name});
-    }
-    const std::string flat_name = names.flat(h.tag);
-    io::write_surface((stage / flat_name).string(), flat, wo);
-    // Per-vertex files show on the flat map in Workbench when it has the surface's vertices: always,
-    // unless a dividing edge could not be flipped and was split (core/conformal_map.h, step 3).
-    if (flat.num_vertices() == h.white.mesh.num_vertices()) spec.push_back({wo.anatomical_structure, "SURFACE", flat_name});
-    sidecar(flat_name, {{"description", "authalic flat map; square side sqrt(cortical area) mm"},
-                        {"metrics", {{"flips", h.metrics.flips}, {"element_area_cv", h.metrics.element_cv}}}});
-    if (options.rectangle) {
-      // This hemisphere's part of the whole-brain 2:1 rectangle, in mm (the rectangle's area equals
-      // both hemispheres' cortical area).
-      const RectanglePart& part = h.left ? rect.left : rect.right;
-      const double total = face_areas(rect.left.V, rect.left.F).sum() + face_areas(rect.right.V, rect.right.F).sum();
-      TriMesh rflat;
-      rflat.V = MatrixXd::Zero(part.UV.rows(), 3);
-      rflat.V.leftCols(2) = part.UV * std::sqrt(total / 2.0);
-      rflat.F = part.F;
-      io::SurfaceWriteOptions ro = wo;
-      ro.metadata["space"] = "authalic whole-brain 2:1 rectangle scaled to the cortical area of both hemispheres (mm)";
-      ro.metadata[kSeamKey] = seam_text(rect.split);  // in [0, 2] units, as `rectangle` records it
-      const std::string rect_name = names.rectangle_flat(h.tag);
-      io::write_surface((stage / rect_name).string(), rflat, ro);
-      if (rflat.num_vertices() == h.white.mesh.num_vertices()) spec.push_back({wo.anatomical_structure, "SURFACE", rect_name});
-      sidecar(rect_name, {{"description", "this hemisphere's part of the whole-brain 2:1 rectangle (left part x in [0, w_L], "
-                                          "right part [w_L, 2] before scaling by sqrt(total cortical area / 2) mm)"},
-                          {"metrics", {{"flips", rect_metrics.flips}, {"element_area_cv", rect_metrics.element_cv},
-                                       {"element_grid", {2 * options.k, options.k}}, {"left_part_width", rect.split}}}});
-    }
-    io::FuncWriteOptions fo;
-    fo.column_names = {"pet"};
-    fo.anatomical_structure = wo.anatomical_structure;
-    fo.metadata = {{"normalisation", table.normalisation}, {"units", table.units}, {"sampling", h.sampling.method}};
-    const std::string pet_name = names.pet(h.tag);
-    io::write_per_vertex((stage / pet_name).string(), h.pet, fo);
-    spec.push_back({wo.anatomical_structure, "METRIC", pet_name});
-    sidecar(pet_name, {{"description", "PET per vertex (normal projection), normalised"}, {"units", table.units}});
-    const std::string img_name = names.pet_elements(h.tag, ".nii.gz");
-    write_element_nifti((stage / img_name).string(), element_image(h.elements.block, table.grid), table.grid, 1,
-                        mean_element_area(h.elements.block), ElementImageKind::kValues, "authalic PET elements " + h.name);
-    sidecar(img_name, {{"description", "element PET values, K x K (i = column, j = row from the bottom)"}, {"units", table.units},
-                       {"space", element_space_note(mean_element_area(h.elements.block))}});
-    ScalarColouring c;
-    const auto range = robust_range(h.pet);
-    c.vmin = range.first;
-    c.vmax = range.second;
-    c.label = table.units;
-    const std::string png_name = names.pet_elements(h.tag, ".png");
-    io::write_png((stage / png_name).string(),
-                  render_element_grid(block_values(h.elements.block), K, K, c, 12, h.name + " PET elements"));
-    sidecar(png_name, {{"description", "element PET values"}});
-    const std::string labels_name = names.element_labels(h.tag);
-    write_element_labels((stage / labels_name).string(), h.elements, table.grid);
-    spec.push_back({wo.anatomical_structure, "LABEL", labels_name});
-    sidecar(labels_name, {{"description", "each vertex's equal-area element: key = element id + 1 (id = row x K + column), 0 = "
-                                          "in no element; pairs with the white and pial surfaces (the input's vertices)"}});
+  json common = {{"software", software_version()}, {"parameters", r.params}, {"inputs", r.checksums}, {"participant", participant}};
+  if (!options.command_line.empty()) common["command_line"] = options.command_line;
+  Sidecars sidecars(std::move(common), summary);
+  std::vector<io::SpecEntry> spec;
+  OutputSink out{stage, names, sidecars, spec};
+  for (const Hemisphere& h : hemis) {
+    const io::SurfaceWriteOptions wo = write_hemisphere_surfaces(h, in, out);
+    if (options.rectangle) write_rectangle_part(h, r.rect, r.rect_metrics, options, wo, out);
+    write_hemisphere_pet(h, r.table, options.k, wo, out);
   }
   const std::string table_name = names.element_table();
-  write_element_table((stage / table_name).string(), table);
+  write_element_table((stage / table_name).string(), r.table);
   summary.files.push_back(table_name);
-  if (compare) {
-    for (int b = 0; b < 2; ++b) {
-      std::vector<double> z(cmp.z.begin() + b * table.grid.num_elements(), cmp.z.begin() + (b + 1) * table.grid.num_elements());
-      ElementBlock zb = hemis[b].elements.block;
-      for (std::size_t i = 0; i < zb.elements.size(); ++i) zb.elements[i].value = z[i];
-      const std::string zimg = names.zscore_elements(hemis[b].tag, ".nii.gz");
-      write_element_nifti((stage / zimg).string(), element_image(zb, table.grid), table.grid, 1, mean_element_area(zb),
-                          ElementImageKind::kZScore, "authalic z " + hemis[b].name);
-      sidecar(zimg, {{"description", "element z-scores, z = (factor x patient - reference mean) / (reference SD x sqrt(1 + 1/n)); "
-                                     "factor: the patient's rescaling to the reference over its normal elements (1 = none)"},
-                     {"space", element_space_note(mean_element_area(zb))},
-                     {"rescale_factor", cmp.scale},
-                     {"rescale_elements", cmp.scale_elements}});
-      ScalarColouring zc;
-      zc.colormap = "coolwarm";
-      zc.vmin = -4;
-      zc.vmax = 4;
-      zc.label = "z";
-      const std::string zpng = names.zscore_elements(hemis[b].tag, ".png");
-      io::write_png((stage / zpng).string(), render_element_grid(z, K, K, zc, 12, hemis[b].name + " z-scores"));
-      sidecar(zpng, {{"description", "element z-scores"}});
-      io::FuncWriteOptions zo;
-      zo.column_names = {"z"};
-      zo.anatomical_structure = hemis[b].left ? "CortexLeft" : "CortexRight";
-      zo.metadata = {{"description", "z of each vertex's equal-area element (NaN: in no element)"}, {"units", "z"}};
-      const std::string zfunc = names.zscore(hemis[b].tag);
-      io::write_per_vertex((stage / zfunc).string(), element_values_at_vertices(hemis[b].elements.vertex_element, z.data(),
-                                                                                 static_cast<int>(z.size())), zo);
-      sidecar(zfunc, {{"description", "per-vertex z: the z of the vertex's element; pairs with the white and pial surfaces"}});
-      spec.push_back({zo.anatomical_structure, "METRIC", zfunc});
-    }
-    const std::string clusters_name = names.clusters();
-    io::write_file_atomically((stage / clusters_name).string(), clusters_tsv(cmp.clusters));
-    sidecar(clusters_name, clusters_tsv_sidecar(options.z_threshold));
-  }
+  if (r.compare) write_comparison(hemis, r.cmp, r.table, options, out);
   const std::string spec_name = names.workbench_spec();
   io::write_workbench_spec((stage / spec_name).string(), spec);
   summary.files.push_back(spec_name);
-
-  for (const auto& [base, j] : sidecars) io::write_file_atomically((stage / (base + ".json")).string(), j.dump(2) + "\n");
+  sidecars.write(stage);
   log.end(summary);
-  if (options.report) {
-    log.begin("report (HTML and PDF)");
-    const ReportData rd = report_data(in, options, hemis, rect, table, compare ? &cmp : nullptr, reference, params, summary, registration);
-    const ReportFigures figures = report_figures(rd);  // drawn once for both
-    write_report((stage / names.report()).string(), rd, figures);
-    write_report_pdf((stage / names.report_pdf()).string(), rd, figures);
-    summary.files.push_back(names.report());
-    summary.files.push_back(names.report_pdf());
-    log.end(summary);
-  }
-  io::write_file_atomically((stage / names.log()).string(), software_version() + "\nsubject sub-" + in.id + "\n" + log.text());
-  summary.files.push_back(names.log());
+  return stage;
+}
 
-  // Swap the finished folder into place.
+// The report (HTML and PDF), into the stage.
+void report_step(const Hemisphere (&hemis)[2], const SubjectInputs& in, const RunOptions& options, const SubjectFiles& names,
+                 const RunResults& r, const NormativeReference& reference, const std::string& registration,
+                 const fs::path& stage, StepLog& log, RunSummary& summary) {
+  log.begin("report (HTML and PDF)");
+  const ReportData rd = report_data(in, options, hemis, r.rect, r.table, r.compare ? &r.cmp : nullptr, reference, r.params, summary,
+                                    registration);
+  const ReportFigures figures = report_figures(rd);  // drawn once for both
+  write_report((stage / names.report()).string(), rd, figures);
+  write_report_pdf((stage / names.report_pdf()).string(), rd, figures);
+  summary.files.push_back(names.report());
+  summary.files.push_back(names.report_pdf());
+  log.end(summary);
+}
+
+// Swap the finished folder into place (replacing a previous run's, under --force).
+void swap_into_place(const fs::path& stage, const fs::path& final_dir, const RunOptions& options, const std::string& id) {
   if (fs::exists(final_dir)) {
-    const fs::path old = fs::path(options.out_dir) / (".sub-" + in.id + ".old-" + std::to_string(::getpid()));
+    const fs::path old = fs::path(options.out_dir) / (".sub-" + id + ".old-" + std::to_string(::getpid()));
     fs::rename(final_dir, old);
     fs::rename(stage, final_dir);
     fs::remove_all(old);
   } else {
     fs::rename(stage, final_dir);
   }
+}
+
+}  // namespace
+
+RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const ProgressFn& progress) {
+  check_id(in.id);
+  if (options.out_dir.empty()) throw InputError("--out: no output folder given");
+  const fs::path final_dir = fs::path(options.out_dir) / ("sub-" + in.id);
+  io::check_inputs_outside({in.lh_white, in.lh_pial, in.rh_white, in.rh_pial, in.lh_cortex, in.rh_cortex, in.pet, in.t1, in.normative,
+                            in.lh_annot, in.rh_annot, in.lh_sphere_reg, in.rh_sphere_reg},
+                           final_dir.string(), options.force ? "--force would replace" : "is the subject's output folder");
+  const OutFolder out_folder(options.out_dir);
+  // The whole run holds the subject's lock: a second run on the same OUT/sub-<id> is refused
+  // instead of racing this one to the final rename.
+  const io::LockFile lock((fs::path(options.out_dir) / (".sub-" + in.id + ".lock")).string(), final_dir.string());
+  remove_dead_staging(options.out_dir, in.id);
+  if (fs::exists(final_dir) && !options.force)
+    throw InputError(final_dir.string() + ": output folder exists; pass --force to replace it or choose another --out");
+
+  RunSummary summary;
+  StepLog log(progress);
+  const SubjectFiles names{in.id};
+  Hemisphere hemis[2];
+  const LoadedInputs inputs = load_and_check_inputs(hemis, in, options, log, summary);
+  const std::string correspondence =
+      correspondence_step(hemis, in, options, inputs.compare ? &inputs.reference : nullptr, log, summary, progress);
+  map_hemispheres(hemis, in, options, log, summary, progress);
+  HemisphereRectangles rect;
+  MapMetrics rect_metrics;
+  if (options.rectangle) rect_metrics = rectangle_step(hemis, options, log, summary, rect);
+  std::string registration;  // for the report's quality flags
+  const Normalisation norm = sample_and_normalise(hemis, in, options, inputs, log, summary, registration);
+  const ElementTable table = elements_step(hemis, in, options, norm, inputs.pet.units, correspondence, log, summary);
+  Comparison cmp;
+  if (inputs.compare) cmp = compare_step(inputs.reference, table, in, options, log, summary);
+  const json params = run_parameters(hemis, options, norm, inputs.compare, cmp, correspondence);
+  const RunResults results{rect, rect_metrics, table, cmp, inputs.compare, params, inputs.checksums};
+  const fs::path stage = write_outputs(hemis, in, options, names, results, log, summary);
+  if (options.report) report_step(hemis, in, options, names, results, inputs.reference, registration, stage, log, summary);
+  io::write_file_atomically((stage / names.log()).string(), software_version() + "\nsubject sub-" + in.id + "\n" + log.text());
+  summary.files.push_back(names.log());
+  swap_into_place(stage, final_dir, options, in.id);
   write_dataset_description(options.out_dir);
   summary.subject_dir = final_dir.string();
   summary.flips_left = hemis[0].metrics.flips;

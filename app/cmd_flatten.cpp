@@ -205,25 +205,29 @@ SquareMapResult map_region(const FlattenArgs& a, const io::Surface& surface, con
   return std::move(r.map);
 }
 
-void run(const FlattenArgs& a) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const int given = !a.faces_from.empty() + !a.label.empty() + !a.patch.empty();
-  if (given > 1) throw InputError("flatten: give at most one of --faces-from, --label, --patch");
-  io::check_file_roles({a.surface, a.faces_from, a.label, a.patch, a.density, a.shading, a.sphere_reg, a.atlas_surface,
-                        a.atlas_sphere, a.atlas_label, a.atlas_faces_from},
-                       {a.out, a.uv, a.initial, a.fs_patch, a.metrics, a.png, a.histogram});
-  const io::Surface surface = io::read_surface(a.surface);
-  const TriMesh& mesh = surface.mesh;
-  std::string region_source;
+// The region to flatten, read and checked against the surface.
+struct FlattenRegion {
+  MatrixXi F;
+  std::string source;
   std::unique_ptr<RegionCleanup> cleanup;
-  const MatrixXi region = region_faces(a, surface, &region_source, &cleanup);
-  if (cleanup) info("flatten: " + a.label + ": " + cleanup->summary());
-  for (Eigen::Index f = 0; f < region.rows(); ++f)
-    for (int c = 0; c < 3; ++c)
-      if (region(f, c) < 0 || region(f, c) >= mesh.num_vertices())
-        throw InputError(region_source + ": face " + std::to_string(f) + " refers to vertex " + std::to_string(region(f, c)) +
-                         " outside " + a.surface + "; give a face set on the same vertices");
+};
 
+// The region's faces (--faces-from, --label, --patch or the whole open surface), each referring
+// to a vertex of the surface.
+FlattenRegion read_region(const FlattenArgs& a, const io::Surface& surface) {
+  FlattenRegion region;
+  region.F = region_faces(a, surface, &region.source, &region.cleanup);
+  if (region.cleanup) info("flatten: " + a.label + ": " + region.cleanup->summary());
+  for (Eigen::Index f = 0; f < region.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c)
+      if (region.F(f, c) < 0 || region.F(f, c) >= surface.mesh.num_vertices())
+        throw InputError(region.source + ": face " + std::to_string(f) + " refers to vertex " + std::to_string(region.F(f, c)) +
+                         " outside " + a.surface + "; give a face set on the same vertices");
+  return region;
+}
+
+// Memory and size limits, checked before minutes of mapping.
+void check_region_size(const FlattenArgs& a, const MatrixXi& region) {
   // A disk has about F / 2 vertices.
   check_memory(a.surface, (region.rows() + 2) / 2, square_map_memory_bytes((region.rows() + 2) / 2, a.grid), a.max_memory);
   // Size validated by the benchmark (B3, 150k vertices; a 600k-vertex region measured 7,185 flipped
@@ -233,7 +237,10 @@ void run(const FlattenArgs& a) {
                      " vertices, more than the " + std::to_string(a.max_vertices) +
                      " the square map is validated for; decimate the surface (e.g. FreeSurfer's mris_decimate) or raise "
                      "--max-vertices");
+}
 
+// The square map's options from the command line (and the --density file).
+SquareMapOptions square_map_options(const FlattenArgs& a, const TriMesh& mesh) {
   SquareMapOptions options;
   options.flow.method = a.method == "mesh" ? FlowMethod::Mesh : FlowMethod::Grid;
   options.flow.grid.resolution = a.grid;
@@ -247,35 +254,13 @@ void run(const FlattenArgs& a) {
   options.transport.grid_resolution = a.omt_grid;
   options.transport.max_iterations = a.omt_iterations;
   if (!a.density.empty()) options.density = io::read_per_vertex(a.density, mesh.num_vertices());
+  return options;
+}
 
-  SquareMapResult r;
-  StageClock clock(terminal_progress());
-  nlohmann::json correspondence;
-  try {
-    r = map_region(a, surface, region, options, clock.progress(), &correspondence);
-  } catch (const InputError& e) {
-    throw InputError(a.surface + " (" + region_source + "): " + e.what());
-  } catch (const ProcessingError& e) {
-    throw ProcessingError(a.surface + " (" + region_source + "): " + e.what() + " (--grid 1024)");
-  }
-  clock.stop();
-  const double seconds_map = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-
-  // Acceptance (core/metrics.h) before anything is written: a map that is not authalic is a
-  // failure (exit 3), never a success with a note.
-  const MapMetrics final_metrics = map_metrics(r.V, r.UV, r.F, Domain::square(), a.k);
-  const MapMetrics accept_metrics = a.k == 32 ? final_metrics : map_metrics(r.V, r.UV, r.F, Domain::square(), 32);
-  // The per-vertex limit is checked on the number the user is shown (the metrics); with a
-  // density the target is not the surface area, so the flow's density-weighted one is used.
-  const bool plain = options.density.size() == 0;
-  const std::string problem = authalic_acceptance_problem(
-      accept_metrics, plain ? accept_metrics.vertex_ln_area.mean : r.flow.final_vertex_mean, plain);
-  const std::string failure = a.surface + " (" + region_source + "): the map is not authalic: " + problem;
-  if (!problem.empty() && !a.keep_failed)
-    throw ProcessingError(failure + "; nothing was written. Try more passes (--passes 6) or a finer grid (--grid 1024); "
-                          "--keep-failed writes the map for inspection, marked as failed");
-
-  // Outputs: flat surface in mm (area = cortical area), uv in [0, 1]^2, FreeSurfer patch.
+// The flat surfaces: in mm (area = cortical area), and optionally uv in [0, 1]^2 and the
+// conformal initial map. Returns the mm per unit-square unit.
+double write_flat_surfaces(const FlattenArgs& a, const io::Surface& surface, const SquareMapResult& r,
+                           const std::string& region_source, const std::string& problem, const nlohmann::json& correspondence) {
   const double scale = std::sqrt(r.surface_area / r.width);
   io::SurfaceWriteOptions wo;
   wo.geometric_type = "Flat";
@@ -299,30 +284,42 @@ void run(const FlattenArgs& a) {
     wi.metadata["authalic_map"] = "square (conformal initial map)";
     write_flat(a.initial, r.UV_initial, r.F, wi, "unit square [0,1]^2 (x right, y up)");
   }
-  if (!a.fs_patch.empty()) {
-    // FreeSurfer patches name vertices of the parent surface: the input's region vertices only.
-    std::vector<char> used(r.num_input_vertices, 0);
-    for (Eigen::Index f = 0; f < region.rows(); ++f)
-      for (int c = 0; c < 3; ++c) used[region(f, c)] = 1;
-    std::vector<int> verts;
-    for (int v = 0; v < r.num_input_vertices; ++v)
-      if (used[v]) verts.push_back(v);
-    // The region's boundary vertices carry FreeSurfer's border flag (stored as -(k+1)).
-    std::vector<char> boundary(r.num_input_vertices, 0);
-    for (const auto& loop : boundary_loops(region, r.num_input_vertices))
-      for (int v : loop) boundary[v] = 1;
-    MatrixXd P = MatrixXd::Zero(static_cast<Eigen::Index>(verts.size()), 3);
-    std::vector<bool> on_border(verts.size());
-    for (size_t k = 0; k < verts.size(); ++k) {
-      P.row(k).head<2>() = r.UV.row(verts[k]) * scale;
-      on_border[k] = boundary[verts[k]] != 0;
-    }
-    io::write_freesurfer_patch(a.fs_patch, verts, P, on_border);
-  }
+  return scale;
+}
 
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+// The FreeSurfer patch (--fs-patch): FreeSurfer patches name vertices of the parent surface, so
+// only the input's region vertices are written.
+void write_fs_patch(const std::string& path, const SquareMapResult& r, const MatrixXi& region, double scale) {
+  std::vector<char> used(r.num_input_vertices, 0);
+  for (Eigen::Index f = 0; f < region.rows(); ++f)
+    for (int c = 0; c < 3; ++c) used[region(f, c)] = 1;
+  std::vector<int> verts;
+  for (int v = 0; v < r.num_input_vertices; ++v)
+    if (used[v]) verts.push_back(v);
+  // The region's boundary vertices carry FreeSurfer's border flag (stored as -(k+1)).
+  std::vector<char> boundary(r.num_input_vertices, 0);
+  for (const auto& loop : boundary_loops(region, r.num_input_vertices))
+    for (int v : loop) boundary[v] = 1;
+  MatrixXd P = MatrixXd::Zero(static_cast<Eigen::Index>(verts.size()), 3);
+  std::vector<bool> on_border(verts.size());
+  for (size_t k = 0; k < verts.size(); ++k) {
+    P.row(k).head<2>() = r.UV.row(verts[k]) * scale;
+    on_border[k] = boundary[verts[k]] != 0;
+  }
+  io::write_freesurfer_patch(path, verts, P, on_border);
+}
+
+// Wall times of the run's stages (s), for the metrics JSON.
+struct FlattenTimes {
+  double map = 0, initial = 0, flow = 0, total = 0;
+};
+
+// The metrics JSON (--metrics, --json): the map, its initial map, flow, distortion and acceptance.
+nlohmann::json flatten_json(const FlattenArgs& a, const SquareMapResult& r, const SquareMapOptions& options,
+                            const FlattenRegion& region, double scale, const MapMetrics& final_metrics,
+                            const std::string& problem, const nlohmann::json& correspondence, const FlattenTimes& t) {
   nlohmann::json j = {{"surface", a.surface},
-                      {"region", region_source},
+                      {"region", region.source},
                       {"output", a.out},
                       {"input_vertices", r.num_input_vertices},
                       {"vertices", r.V.rows()},
@@ -343,45 +340,100 @@ void run(const FlattenArgs& a) {
                       {"flow", flow_json(r.flow, options.flow)},
                       {"flips", r.flips},
                       {"metrics", metrics_json(final_metrics)},
-                      {"seconds", {{"map", seconds_map}, {"initial_map", clock.seconds("initial")}, {"flow", clock.seconds("stretch") + clock.seconds("flow")}, {"total", seconds}}}};
-  if (cleanup) j["region_cleanup"] = region_cleanup_json(*cleanup);
+                      {"seconds", {{"map", t.map}, {"initial_map", t.initial}, {"flow", t.flow}, {"total", t.total}}}};
+  if (region.cleanup) j["region_cleanup"] = region_cleanup_json(*region.cleanup);
   j["transport"] = transport_json(r, options);
   j["correspondence"] = correspondence;
   j["acceptance"] = acceptance_json(problem, "32x32");
   j["initial_map"]["stretch_energy"] = {{"iterations", r.stretch.iterations},
                                         {"face_ln_stretch_abs_mean_before", r.stretch.initial_log_stretch},
                                         {"face_ln_stretch_abs_mean_after", r.stretch.final_log_stretch}};
+  return j;
+}
+
+// The picture of the map (--png), shaded by sulcal depth or the --shading file, with its element grid.
+void write_map_png(const FlattenArgs& a, const TriMesh& mesh, const SquareMapResult& r) {
+  analysis::ScalarColouring c;
+  VectorXd shade;
+  if (a.shading.empty()) {
+    shade = sulcal_depth_proxy(mesh.V, mesh.F);
+    c.label = "depth below smoothed surface (mm)";
+  } else {
+    shade = io::read_per_vertex(a.shading, mesh.num_vertices());
+    c.label = "sulcal depth / curvature";
+  }
+  c.values = extend_to_inserted(shade, r.initial).col(0);
+  c.colormap = "gray_r";
+  std::tie(c.vmin, c.vmax) = analysis::robust_range(c.values);
+  analysis::FlatRenderOptions fo;
+  fo.grid_cols = fo.grid_rows = a.k;
+  fo.title = "authalic map, " + std::to_string(a.k) + "x" + std::to_string(a.k) + " elements";
+  io::write_png(a.png, analysis::render_flat(r.UV, r.F, c, fo));
+}
+
+// Histograms of the per-face area and angle distortion (--histogram).
+void write_distortion_histogram(const std::string& path, const SquareMapResult& r) {
+  VectorXd up, la;
+  face_stretch_metrics(r.V, r.UV, r.F, &up, &la);
+  io::write_png(path, analysis::render_histograms({std::vector<double>(up.data(), up.data() + up.size()),
+                                                   std::vector<double>(la.data(), la.data() + la.size())},
+                                                  {"area distortion ln(gmax*gmin)", "angle distortion ln(gmax/gmin)"},
+                                                  60, 1000, 400));
+}
+
+void run(const FlattenArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const int given = !a.faces_from.empty() + !a.label.empty() + !a.patch.empty();
+  if (given > 1) throw InputError("flatten: give at most one of --faces-from, --label, --patch");
+  io::check_file_roles({a.surface, a.faces_from, a.label, a.patch, a.density, a.shading, a.sphere_reg, a.atlas_surface,
+                        a.atlas_sphere, a.atlas_label, a.atlas_faces_from},
+                       {a.out, a.uv, a.initial, a.fs_patch, a.metrics, a.png, a.histogram});
+  const io::Surface surface = io::read_surface(a.surface);
+  const TriMesh& mesh = surface.mesh;
+  const FlattenRegion region = read_region(a, surface);
+  check_region_size(a, region.F);
+  const SquareMapOptions options = square_map_options(a, mesh);
+
+  SquareMapResult r;
+  StageClock clock(terminal_progress());
+  nlohmann::json correspondence;
+  try {
+    r = map_region(a, surface, region.F, options, clock.progress(), &correspondence);
+  } catch (const InputError& e) {
+    throw InputError(a.surface + " (" + region.source + "): " + e.what());
+  } catch (const ProcessingError& e) {
+    throw ProcessingError(a.surface + " (" + region.source + "): " + e.what() + " (--grid 1024)");
+  }
+  clock.stop();
+  const double seconds_map = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // Acceptance (core/metrics.h) before anything is written: a map that is not authalic is a
+  // failure (exit 3), never a success with a note.
+  const MapMetrics final_metrics = map_metrics(r.V, r.UV, r.F, Domain::square(), a.k);
+  const MapMetrics accept_metrics = a.k == 32 ? final_metrics : map_metrics(r.V, r.UV, r.F, Domain::square(), 32);
+  // The per-vertex limit is checked on the number the user is shown (the metrics); with a
+  // density the target is not the surface area, so the flow's density-weighted one is used.
+  const bool plain = options.density.size() == 0;
+  const std::string problem = authalic_acceptance_problem(
+      accept_metrics, plain ? accept_metrics.vertex_ln_area.mean : r.flow.final_vertex_mean, plain);
+  const std::string failure = a.surface + " (" + region.source + "): the map is not authalic: " + problem;
+  if (!problem.empty() && !a.keep_failed)
+    throw ProcessingError(failure + "; nothing was written. Try more passes (--passes 6) or a finer grid (--grid 1024); "
+                          "--keep-failed writes the map for inspection, marked as failed");
+
+  // Outputs: flat surface in mm (area = cortical area), uv in [0, 1]^2, FreeSurfer patch.
+  const double scale = write_flat_surfaces(a, surface, r, region.source, problem, correspondence);
+  if (!a.fs_patch.empty()) write_fs_patch(a.fs_patch, r, region.F, scale);
+
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const FlattenTimes times{seconds_map, clock.seconds("initial"), clock.seconds("stretch") + clock.seconds("flow"), seconds};
+  nlohmann::json j = flatten_json(a, r, options, region, scale, final_metrics, problem, correspondence, times);
   if (!a.metrics.empty()) {
     j["initial_metrics"] = metrics_json(map_metrics(r.V, r.UV_initial, r.F, Domain::square(), a.k));
     write_json_file(a.metrics, j);
   }
-
-  if (!a.png.empty()) {
-    analysis::ScalarColouring c;
-    VectorXd shade;
-    if (a.shading.empty()) {
-      shade = sulcal_depth_proxy(mesh.V, mesh.F);
-      c.label = "depth below smoothed surface (mm)";
-    } else {
-      shade = io::read_per_vertex(a.shading, mesh.num_vertices());
-      c.label = "sulcal depth / curvature";
-    }
-    c.values = extend_to_inserted(shade, r.initial).col(0);
-    c.colormap = "gray_r";
-    std::tie(c.vmin, c.vmax) = analysis::robust_range(c.values);
-    analysis::FlatRenderOptions fo;
-    fo.grid_cols = fo.grid_rows = a.k;
-    fo.title = "authalic map, " + std::to_string(a.k) + "x" + std::to_string(a.k) + " elements";
-    io::write_png(a.png, analysis::render_flat(r.UV, r.F, c, fo));
-  }
-  if (!a.histogram.empty()) {
-    VectorXd up, la;
-    face_stretch_metrics(r.V, r.UV, r.F, &up, &la);
-    io::write_png(a.histogram, analysis::render_histograms({std::vector<double>(up.data(), up.data() + up.size()),
-                                                            std::vector<double>(la.data(), la.data() + la.size())},
-                                                           {"area distortion ln(gmax*gmin)", "angle distortion ln(gmax/gmin)"},
-                                                           60, 1000, 400));
-  }
+  if (!a.png.empty()) write_map_png(a, mesh, r);
+  if (!a.histogram.empty()) write_distortion_histogram(a.histogram, r);
 
   std::ostringstream line;
   line << "flatten: " << a.out << ": " << r.flips << " flipped faces, element CV " << final_metrics.element_cv << " ("

@@ -59,10 +59,8 @@ std::string png_path_for(const std::string& out) {
   return out + ".png";
 }
 
-int run_sample(const SampleArgs& a) {
-  const auto start = std::chrono::steady_clock::now();
-  io::check_file_roles({a.volume, a.surface, a.ribbon, a.surface_to_volume, a.register_t1, a.map, a.cortex},
-                       {a.out, a.png.empty() ? png_path_for(a.out) : a.png});
+// Combinations of options that cannot work, refused before any file is read.
+void check_sample_options(const SampleArgs& a) {
   if (a.trilinear && !a.ribbon.empty()) throw InputError("--trilinear and --ribbon: choose one sampling mode");
   if (a.stat != "mean" && a.stat != "max") throw InputError("--stat: '" + a.stat + "' is not mean or max");
   if (!a.register_t1.empty() && !a.surface_to_volume.empty())
@@ -74,63 +72,64 @@ int run_sample(const SampleArgs& a) {
     throw InputError("--normalize global: give the cortex region of " + a.surface +
                      " with --cortex (a FreeSurfer label such as lh.cortex.label, a GIFTI label or a mask); the mean over "
                      "the whole surface would include the medial wall");
+}
 
-  io::VolumeReadOptions vo;
-  vo.frame = a.frame;
-  vo.sum_frames = a.sum_frames;
-  const io::Volume volume = io::read_volume(a.volume, vo);
-  const io::Surface surface = io::read_surface(a.surface);
-  if (surface.mesh.num_faces() == 0) throw InputError(a.surface + ": the surface has no triangles");
+// The surface -> volume world transform and where it came from (the surface's own footer, a
+// --surface-to-volume matrix, or --register's rigid registration of the PET to the T1).
+struct SurfaceToVolume {
+  Eigen::Matrix4d T;
+  std::string source;
+  io::RigidRegistration registration;
+};
 
-  Eigen::Matrix4d to_volume = surface.to_scanner;
-  std::string transform_source = surface.has_volume_geometry ? "FreeSurfer footer (tkregister RAS + c_ras)" : "identity (surface in scanner RAS)";
+SurfaceToVolume surface_to_volume(const SampleArgs& a, const io::Surface& surface, const io::Volume& volume) {
+  SurfaceToVolume s;
+  s.T = surface.to_scanner;
+  s.source = surface.has_volume_geometry ? "FreeSurfer footer (tkregister RAS + c_ras)" : "identity (surface in scanner RAS)";
   if (!a.surface_to_volume.empty()) {
     std::ifstream in(a.surface_to_volume);
     if (!in) throw InputError(a.surface_to_volume + ": cannot read the surface-to-volume matrix");
     std::stringstream buf;
     buf << in.rdbuf();
-    to_volume = analysis::parse_affine_text(buf.str(), a.surface_to_volume);
-    transform_source = a.surface_to_volume;
+    s.T = analysis::parse_affine_text(buf.str(), a.surface_to_volume);
+    s.source = a.surface_to_volume;
   }
-  io::RigidRegistration registration;
   if (!a.register_t1.empty()) {
     // The surface is in the T1's scanner RAS; the PET is not co-registered: register the PET to the
     // T1 (rigid, Mattes MI) and carry the surface into the PET's world coordinates.
     const io::Volume t1 = io::read_volume(a.register_t1);
-    registration = io::register_rigid(t1, volume);
-    to_volume = registration.t1_to_pet * to_volume;
-    transform_source = "rigid registration of " + a.volume + " to " + a.register_t1 + " (ITK v4, Mattes MI, final metric " +
-                       std::to_string(registration.metric) + ", " + registration.stop_condition + ")";
-    info("sample: registered the PET to " + a.register_t1 + ": Mattes MI " + std::to_string(registration.metric) + " after " +
-         std::to_string(registration.iterations) + " iterations; T1 RAS -> PET RAS:\n" + matrix_text(registration.t1_to_pet));
+    s.registration = io::register_rigid(t1, volume);
+    s.T = s.registration.t1_to_pet * s.T;
+    s.source = "rigid registration of " + a.volume + " to " + a.register_t1 + " (ITK v4, Mattes MI, final metric " +
+               std::to_string(s.registration.metric) + ", " + s.registration.stop_condition + ")";
+    info("sample: registered the PET to " + a.register_t1 + ": Mattes MI " + std::to_string(s.registration.metric) + " after " +
+         std::to_string(s.registration.iterations) + " iterations; T1 RAS -> PET RAS:\n" + matrix_text(s.registration.t1_to_pet));
   }
-  const MatrixXd V_world = analysis::transform_points(to_volume, surface.mesh.V);
+  return s;
+}
 
+// The PET at the vertices: trilinear at the vertex, over the ribbon to a second surface, or by
+// normal projection (the default).
+analysis::SamplingResult sample_volume(const SampleArgs& a, const io::Volume& volume, const MatrixXd& V_world,
+                                       const MatrixXi& F, const SurfaceToVolume& to_volume) {
   analysis::SamplingOptions so;
   so.depth_mm = a.depth;
   so.step_mm = a.step;
   so.outward = a.outward;
   so.statistic = a.stat == "max" ? analysis::SamplingStatistic::Max : analysis::SamplingStatistic::Mean;
-  analysis::SamplingResult result;
-  const auto sampling_start = std::chrono::steady_clock::now();
-  const std::clock_t sampling_cpu_start = std::clock();
-  if (a.trilinear) {
-    result = analysis::sample_at_vertices(volume, V_world, surface.mesh.F, so);
-  } else if (!a.ribbon.empty()) {
+  if (a.trilinear) return analysis::sample_at_vertices(volume, V_world, F, so);
+  if (!a.ribbon.empty()) {
     const io::Surface other = io::read_surface(a.ribbon);
-    Eigen::Matrix4d other_to_volume = a.surface_to_volume.empty() ? other.to_scanner : to_volume;
-    if (!a.register_t1.empty()) other_to_volume = registration.t1_to_pet * other.to_scanner;
-    result = analysis::sample_ribbon(volume, V_world, analysis::transform_points(other_to_volume, other.mesh.V),
-                                     surface.mesh.F, so);
-  } else {
-    result = analysis::sample_normal_projection(volume, V_world, surface.mesh.F, so);
+    Eigen::Matrix4d other_to_volume = a.surface_to_volume.empty() ? other.to_scanner : to_volume.T;
+    if (!a.register_t1.empty()) other_to_volume = to_volume.registration.t1_to_pet * other.to_scanner;
+    return analysis::sample_ribbon(volume, V_world, analysis::transform_points(other_to_volume, other.mesh.V), F, so);
   }
+  return analysis::sample_normal_projection(volume, V_world, F, so);
+}
 
-  const double sampling_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sampling_start).count();
-  // CPU time of all threads: the step's cost on an idle machine, whatever the load of a shared one.
-  const double sampling_cpu_seconds = double(std::clock() - sampling_cpu_start) / CLOCKS_PER_SEC;
-
-  // Intensity normalisation.
+// Intensity normalisation: the global mean over the --cortex region, a reference-region mask, or none.
+analysis::Normalisation sample_normalisation(const SampleArgs& a, const io::Volume& volume, const io::Surface& surface,
+                                             const MatrixXd& V_world, const VectorXd& values) {
   analysis::Normalisation norm;
   norm.units = volume.units.empty() ? "PET units" : volume.units;
   norm.description = "none: values in the PET's units";
@@ -141,7 +140,7 @@ int run_sample(const SampleArgs& a) {
     if (cortex.mesh.F.rows() == 0)
       throw InputError(a.cortex + ": no triangle of " + a.surface + " has all its vertices in this region; give the cortex label of this surface");
     VectorXd cortex_values(cortex.vertex_to_parent.size());
-    for (Eigen::Index i = 0; i < cortex_values.size(); ++i) cortex_values[i] = result.values[cortex.vertex_to_parent[i]];
+    for (Eigen::Index i = 0; i < cortex_values.size(); ++i) cortex_values[i] = values[cortex.vertex_to_parent[i]];
     try {
       norm = analysis::global_cortical_mean(cortex_values, cortex.mesh.V, cortex.mesh.F);
     } catch (const InputError& e) {
@@ -151,20 +150,22 @@ int run_sample(const SampleArgs& a) {
     io::Volume mask = io::read_volume(a.normalize);
     norm = analysis::reference_region_mean(volume, mask);
   }
-  analysis::apply_normalisation(result.values, norm);
+  return norm;
+}
 
-  // Output.
+// The per-vertex output with its provenance (transform, sampling, normalisation) in the metadata.
+void write_sampled_values(const SampleArgs& a, const std::string& hemisphere, const analysis::SamplingResult& result,
+                          const SurfaceToVolume& to_volume, const analysis::Normalisation& norm) {
   io::FuncWriteOptions fo;
   fo.column_names = {"pet"};
-  const std::string hemisphere = analysis::hemisphere_of(surface.metadata, a.surface);
   if (hemisphere == "left") fo.anatomical_structure = "CortexLeft";
   if (hemisphere == "right") fo.anatomical_structure = "CortexRight";
   fo.metadata = {{"software", software_version()},
                  {"volume", a.volume},
                  {"surface", a.surface},
                  {"sampling", result.method},
-                 {"surface_to_volume", matrix_text(to_volume)},
-                 {"surface_to_volume_source", transform_source},
+                 {"surface_to_volume", matrix_text(to_volume.T)},
+                 {"surface_to_volume_source", to_volume.source},
                  {"normalisation", analysis::to_string(norm.kind)},
                  {"normalisation_detail", norm.description},
                  {"normalisation_reference_value", std::to_string(norm.reference_value)},
@@ -172,21 +173,23 @@ int run_sample(const SampleArgs& a) {
   if (!a.ribbon.empty()) fo.metadata["ribbon_surface"] = a.ribbon;
   if (a.normalize == "global") fo.metadata["normalisation_region"] = a.cortex;
   io::write_per_vertex(a.out, result.values, fo);
+}
 
-  // Picture: the flat map when given, else lateral and medial views of the surface.
-  const std::string png = a.png.empty() ? png_path_for(a.out) : a.png;
+// Picture: the flat map when given, else lateral and medial views of the surface.
+void write_sample_png(const SampleArgs& a, const std::string& png, const io::Surface& surface, const MatrixXd& V_world,
+                      const std::string& hemisphere, const VectorXd& values, const std::string& units) {
   analysis::ScalarColouring c;
-  c.values = result.values;
+  c.values = values;
   c.colormap = "viridis";
-  c.label = norm.units;
-  std::tie(c.vmin, c.vmax) = analysis::robust_range(result.values);
+  c.label = units;
+  std::tie(c.vmin, c.vmax) = analysis::robust_range(values);
   io::RgbImage picture;
   if (!a.map.empty()) {
     const io::Surface map = io::read_surface(a.map);
     if (map.mesh.num_vertices() < surface.mesh.num_vertices())
       throw InputError(a.map + ": the map has fewer vertices than the surface; give the map of this surface");
     c.values = VectorXd::Constant(map.mesh.num_vertices(), std::nan(""));
-    c.values.head(result.values.size()) = result.values;
+    c.values.head(values.size()) = values;
     analysis::FlatRenderOptions o;
     o.x0 = map.mesh.V.col(0).minCoeff();
     o.y0 = map.mesh.V.col(1).minCoeff();
@@ -201,6 +204,37 @@ int run_sample(const SampleArgs& a) {
     picture = analysis::render_surface_views(V_world, surface.mesh.F, c, {analysis::View::Lateral, analysis::View::Medial}, o);
   }
   io::write_png(png, picture);
+}
+
+int run_sample(const SampleArgs& a) {
+  const auto start = std::chrono::steady_clock::now();
+  io::check_file_roles({a.volume, a.surface, a.ribbon, a.surface_to_volume, a.register_t1, a.map, a.cortex},
+                       {a.out, a.png.empty() ? png_path_for(a.out) : a.png});
+  check_sample_options(a);
+
+  io::VolumeReadOptions vo;
+  vo.frame = a.frame;
+  vo.sum_frames = a.sum_frames;
+  const io::Volume volume = io::read_volume(a.volume, vo);
+  const io::Surface surface = io::read_surface(a.surface);
+  if (surface.mesh.num_faces() == 0) throw InputError(a.surface + ": the surface has no triangles");
+  const SurfaceToVolume to_volume = surface_to_volume(a, surface, volume);
+  const MatrixXd V_world = analysis::transform_points(to_volume.T, surface.mesh.V);
+
+  const auto sampling_start = std::chrono::steady_clock::now();
+  const std::clock_t sampling_cpu_start = std::clock();
+  analysis::SamplingResult result = sample_volume(a, volume, V_world, surface.mesh.F, to_volume);
+  const double sampling_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sampling_start).count();
+  // CPU time of all threads: the step's cost on an idle machine, whatever the load of a shared one.
+  const double sampling_cpu_seconds = double(std::clock() - sampling_cpu_start) / CLOCKS_PER_SEC;
+
+  const analysis::Normalisation norm = sample_normalisation(a, volume, surface, V_world, result.values);
+  analysis::apply_normalisation(result.values, norm);
+
+  const std::string hemisphere = analysis::hemisphere_of(surface.metadata, a.surface);
+  write_sampled_values(a, hemisphere, result, to_volume, norm);
+  const std::string png = a.png.empty() ? png_path_for(a.out) : a.png;
+  write_sample_png(a, png, surface, V_world, hemisphere, result.values, norm.units);
 
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   for (const auto& n : result.notes) info("authalic sample: note: " + n);

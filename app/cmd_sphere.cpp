@@ -46,12 +46,8 @@ const char* kOrientationRule =
     "+x right, +y anterior, +z superior of the input's RAS frame: the rotation that best aligns each vertex's sphere "
     "position with its direction from the surface's area centroid (area-weighted Procrustes)";
 
-void run(const SphereArgs& a) {
-  const auto t0 = std::chrono::steady_clock::now();
-  io::check_file_roles({a.surface, a.sulc}, {a.out, a.metrics, a.png, a.conformal});
-  const io::Surface surface = io::read_surface(a.surface);
-  const TriMesh& mesh = surface.mesh;
-  check_memory(a.surface, mesh.num_vertices(), sphere_map_memory_bytes(mesh.num_vertices()), a.max_memory);
+// The sphere map's options from the command line, refusing combinations the routes cannot do.
+SphereMapOptions sphere_map_options(const SphereArgs& a) {
   SphereMapOptions options;
   options.puncture_face = a.puncture;
   options.flow_options.grid_cells = a.grid;
@@ -63,6 +59,134 @@ void run(const SphereArgs& a) {
     throw InputError("--refine omt: the refinement works on the square route's square map; drop --route flow");
   if (!a.conformal.empty() && options.route != SphereRoute::Flow)
     throw InputError("--conformal: only the flow route has a conformal sphere; add --route flow to write one");
+  return options;
+}
+
+// The sphere (and --conformal's initial sphere) scaled to `radius` mm. Returns the sphere written.
+TriMesh write_sphere_surfaces(const SphereArgs& a, const io::Surface& surface, const SphereMapResult& r, double radius,
+                              const std::string& problem) {
+  const TriMesh& mesh = surface.mesh;
+  io::SurfaceWriteOptions wo;
+  wo.geometric_type = "Spherical";
+  const auto structure = surface.metadata.find("AnatomicalStructurePrimary");
+  if (structure != surface.metadata.end()) wo.anatomical_structure = structure->second;
+  wo.metadata = {{"authalic_map", "sphere"},
+                 {"authalic_radius_mm", std::to_string(radius)},
+                 {"authalic_orientation", kOrientationRule},
+                 {"authalic_source", a.surface},
+                 {"authalic_acceptance", problem.empty() ? "passed" : "FAILED: " + problem}};
+  TriMesh out{r.sphere * radius, mesh.F};
+  io::write_surface(a.out, out, wo);
+  if (!a.conformal.empty()) {
+    wo.metadata["authalic_map"] = "sphere (conformal initial map, Haker et al. 2000)";
+    io::write_surface(a.conformal, TriMesh{r.conformal * radius, mesh.F}, wo);
+  }
+  return out;
+}
+
+// What the route did, for the metrics JSON: the rotation, then the flow's passes (flow route) or
+// the square route's steps (cap, rest, coarse sphere pass, crushed patches, polish).
+void add_route_json(nlohmann::json& j, const SphereMapResult& r) {
+  nlohmann::json rot = nlohmann::json::array();
+  for (int i = 0; i < 3; ++i) rot.push_back({r.rotation(i, 0), r.rotation(i, 1), r.rotation(i, 2)});
+  j["rotation"] = rot;
+  nlohmann::json passes = nlohmann::json::array();
+  for (const auto& p : r.flow.passes)
+    passes.push_back({{"density_min", p.rho_min}, {"density_max", p.rho_max}, {"density_abs_ln_mean", p.rho_abs_log_mean},
+                      {"rk4_steps", p.rk4_steps}});
+  if (r.route == SphereRoute::Flow) {
+    j["flow"] = {{"method", "Moser flow on a fixed cube-sphere background"},
+                 {"grid_cells_per_edge", r.flow.grid_cells},
+                 {"grid_vertices", r.flow.grid_vertices},
+                 {"iterations", r.flow.passes.size()},
+                 {"passes", passes}};
+  } else {
+    const SphereFromSquareReport& q = r.square_route;
+    j["square_route"] = {{"cap_seed_vertex", q.seed_vertex},
+                         {"cap_faces", q.cap_faces},
+                         {"cap_area_fraction", q.cap_area_fraction},
+                         {"rest_faces", q.rest_faces},
+                         {"rest_square_flow", {{"iterations", q.square_flow.iterations},
+                                               {"polish_iterations", q.square_flow.polish_iterations},
+                                               {"vertex_ln_area_abs_mean", q.square_flow.final_vertex_mean}}},
+                         {"rest_stretch_energy_iterations", q.square_stretch.iterations},
+                         {"cap_stretch_energy", {{"iterations", q.cap.iterations},
+                                                 {"face_ln_stretch_abs_mean_before", q.cap.initial_log_stretch},
+                                                 {"face_ln_stretch_abs_mean_after", q.cap.final_log_stretch}}},
+                         {"coarse_sphere_pass", {{"grid_cells_per_edge", q.sphere_flow.grid_cells},
+                                                 {"passes", q.sphere_flow.passes.size()},
+                                                 {"density_min", q.sphere_flow.passes.empty() ? 0.0 : q.sphere_flow.passes[0].rho_min},
+                                                 {"density_max", q.sphere_flow.passes.empty() ? 0.0 : q.sphere_flow.passes[0].rho_max}}},
+                         {"crushed_patches", {{"opened", q.crushed.patches},
+                                              {"faces", q.crushed.crushed_faces},
+                                              {"missing_area_fraction", q.crushed.missing_share},
+                                              {"put_back", q.crushed.patches_undone}}},
+                         {"sphere_polish_face_ln_area_abs_mean", q.polish_face_error}};
+  }
+}
+
+// Wall times of the run's stages (s), for the metrics JSON.
+struct SphereTimes {
+  double conformal = 0, flow = 0, total = 0;
+};
+
+// The metrics JSON (--metrics, --json): the sphere, its route, distortion and acceptance.
+nlohmann::json sphere_json(const SphereArgs& a, const TriMesh& mesh, const SphereMapResult& r, const SphereMapOptions& options,
+                           double area, double radius, bool left, const MapMetrics& final_metrics, const std::string& problem,
+                           const SphereTimes& t) {
+  nlohmann::json j = {{"surface", a.surface},
+                      {"output", a.out},
+                      {"vertices", mesh.num_vertices()},
+                      {"faces", mesh.num_faces()},
+                      {"surface_area_mm2", area},
+                      {"radius_mm", radius},
+                      {"hemisphere", left ? "left" : "right"},
+                      {"orientation_rule", kOrientationRule},
+                      {"route", r.route == SphereRoute::Flow ? "flow" : "square"},
+                      {"route_fallback_reason", r.fallback_reason},
+                      {"puncture_face", r.puncture_face},
+                      {"puncture_attempts", r.puncture_attempts},
+                      {"conformal_flips", r.conformal_flips},
+                      {"mobius_centroid_residual", r.mobius_residual},
+                      {"repaired_vertices", r.repaired_vertices},
+                      {"flips", r.flips},
+                      {"metrics", metrics_json(final_metrics)},
+                      {"seconds", {{"conformal", t.conformal}, {"flow", t.flow}, {"total", t.total}}}};
+  j["acceptance"] = acceptance_json(problem, "64x32");
+  j["refine"] = a.refine;
+  if (options.square_route.square.optimal_transport && r.route == SphereRoute::Square) {
+    const OptimalTransportReport& ot = r.square_route.square_transport;
+    j["square_route_transport"] = {{"iterations", ot.iterations},
+                                   {"stop_reason", ot.stop_reason},
+                                   {"cost_before", ot.initial_cost},
+                                   {"cost_after_refinement", ot.final_cost},
+                                   {"units", "mean squared displacement of the square part from its conformal map, "
+                                             "unit-square units^2"}};
+  }
+  add_route_json(j, r);
+  return j;
+}
+
+// The picture (--png): lateral and medial views of the sphere shaded by sulcal depth.
+void write_sphere_png(const SphereArgs& a, const TriMesh& mesh, const TriMesh& out, bool left, const std::string& problem) {
+  analysis::ScalarColouring c;
+  c.values = a.sulc.empty() ? sulcal_depth_proxy(mesh.V, mesh.F) : io::read_per_vertex(a.sulc, mesh.num_vertices());
+  c.colormap = "gray_r";
+  c.label = a.sulc.empty() ? "depth below smoothed surface (mm)" : "sulcal depth";
+  std::tie(c.vmin, c.vmax) = analysis::robust_range(c.values);
+  analysis::SurfaceRenderOptions so;
+  so.left_hemisphere = left;
+  so.title = problem.empty() ? "authalic sphere" : "FAILED acceptance: sphere map (kept for inspection)";
+  io::write_png(a.png, analysis::render_surface_views(out.V, out.F, c, {analysis::View::Lateral, analysis::View::Medial}, so));
+}
+
+void run(const SphereArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  io::check_file_roles({a.surface, a.sulc}, {a.out, a.metrics, a.png, a.conformal});
+  const io::Surface surface = io::read_surface(a.surface);
+  const TriMesh& mesh = surface.mesh;
+  check_memory(a.surface, mesh.num_vertices(), sphere_map_memory_bytes(mesh.num_vertices()), a.max_memory);
+  const SphereMapOptions options = sphere_map_options(a);
   SphereMapResult r;
   StageClock clock(terminal_progress());
   const auto t_map = std::chrono::steady_clock::now();
@@ -87,106 +211,15 @@ void run(const SphereArgs& a) {
   const double area = face_areas(mesh.V, mesh.F).sum();
   const double radius = a.area_radius ? std::sqrt(area / (4.0 * M_PI)) : a.radius;
   const bool left = is_left_hemisphere(surface.metadata, mesh.V);
-  io::SurfaceWriteOptions wo;
-  wo.geometric_type = "Spherical";
-  const auto structure = surface.metadata.find("AnatomicalStructurePrimary");
-  if (structure != surface.metadata.end()) wo.anatomical_structure = structure->second;
-  wo.metadata = {{"authalic_map", "sphere"},
-                 {"authalic_radius_mm", std::to_string(radius)},
-                 {"authalic_orientation", kOrientationRule},
-                 {"authalic_source", a.surface},
-                 {"authalic_acceptance", problem.empty() ? "passed" : "FAILED: " + problem}};
-  TriMesh out{r.sphere * radius, mesh.F};
-  io::write_surface(a.out, out, wo);
-  if (!a.conformal.empty()) {
-    wo.metadata["authalic_map"] = "sphere (conformal initial map, Haker et al. 2000)";
-    io::write_surface(a.conformal, TriMesh{r.conformal * radius, mesh.F}, wo);
-  }
-
-  nlohmann::json j = {{"surface", a.surface},
-                      {"output", a.out},
-                      {"vertices", mesh.num_vertices()},
-                      {"faces", mesh.num_faces()},
-                      {"surface_area_mm2", area},
-                      {"radius_mm", radius},
-                      {"hemisphere", left ? "left" : "right"},
-                      {"orientation_rule", kOrientationRule},
-                      {"route", r.route == SphereRoute::Flow ? "flow" : "square"},
-                      {"route_fallback_reason", r.fallback_reason},
-                      {"puncture_face", r.puncture_face},
-                      {"puncture_attempts", r.puncture_attempts},
-                      {"conformal_flips", r.conformal_flips},
-                      {"mobius_centroid_residual", r.mobius_residual},
-                      {"repaired_vertices", r.repaired_vertices},
-                      {"flips", r.flips},
-                      {"metrics", metrics_json(final_metrics)},
-                      {"seconds", {{"conformal", clock.seconds("conformal")}, {"flow", seconds_map - clock.seconds("conformal")}, {"total", seconds}}}};
-  j["acceptance"] = acceptance_json(problem, "64x32");
-  j["refine"] = a.refine;
-  if (options.square_route.square.optimal_transport && r.route == SphereRoute::Square) {
-    const OptimalTransportReport& t = r.square_route.square_transport;
-    j["square_route_transport"] = {{"iterations", t.iterations},
-                                   {"stop_reason", t.stop_reason},
-                                   {"cost_before", t.initial_cost},
-                                   {"cost_after_refinement", t.final_cost},
-                                   {"units", "mean squared displacement of the square part from its conformal map, "
-                                             "unit-square units^2"}};
-  }
-  {
-    nlohmann::json rot = nlohmann::json::array();
-    for (int i = 0; i < 3; ++i) rot.push_back({r.rotation(i, 0), r.rotation(i, 1), r.rotation(i, 2)});
-    j["rotation"] = rot;
-    nlohmann::json passes = nlohmann::json::array();
-    for (const auto& p : r.flow.passes)
-      passes.push_back({{"density_min", p.rho_min}, {"density_max", p.rho_max}, {"density_abs_ln_mean", p.rho_abs_log_mean},
-                        {"rk4_steps", p.rk4_steps}});
-    if (r.route == SphereRoute::Flow) {
-      j["flow"] = {{"method", "Moser flow on a fixed cube-sphere background"},
-                   {"grid_cells_per_edge", r.flow.grid_cells},
-                   {"grid_vertices", r.flow.grid_vertices},
-                   {"iterations", r.flow.passes.size()},
-                   {"passes", passes}};
-    } else {
-      const SphereFromSquareReport& q = r.square_route;
-      j["square_route"] = {{"cap_seed_vertex", q.seed_vertex},
-                           {"cap_faces", q.cap_faces},
-                           {"cap_area_fraction", q.cap_area_fraction},
-                           {"rest_faces", q.rest_faces},
-                           {"rest_square_flow", {{"iterations", q.square_flow.iterations},
-                                                 {"polish_iterations", q.square_flow.polish_iterations},
-                                                 {"vertex_ln_area_abs_mean", q.square_flow.final_vertex_mean}}},
-                           {"rest_stretch_energy_iterations", q.square_stretch.iterations},
-                           {"cap_stretch_energy", {{"iterations", q.cap.iterations},
-                                                   {"face_ln_stretch_abs_mean_before", q.cap.initial_log_stretch},
-                                                   {"face_ln_stretch_abs_mean_after", q.cap.final_log_stretch}}},
-                           {"coarse_sphere_pass", {{"grid_cells_per_edge", q.sphere_flow.grid_cells},
-                                                   {"passes", q.sphere_flow.passes.size()},
-                                                   {"density_min", q.sphere_flow.passes.empty() ? 0.0 : q.sphere_flow.passes[0].rho_min},
-                                                   {"density_max", q.sphere_flow.passes.empty() ? 0.0 : q.sphere_flow.passes[0].rho_max}}},
-                           {"crushed_patches", {{"opened", q.crushed.patches},
-                                                {"faces", q.crushed.crushed_faces},
-                                                {"missing_area_fraction", q.crushed.missing_share},
-                                                {"put_back", q.crushed.patches_undone}}},
-                           {"sphere_polish_face_ln_area_abs_mean", q.polish_face_error}};
-    }
-  }
+  const TriMesh out = write_sphere_surfaces(a, surface, r, radius, problem);
+  const SphereTimes times{clock.seconds("conformal"), seconds_map - clock.seconds("conformal"), seconds};
+  nlohmann::json j = sphere_json(a, mesh, r, options, area, radius, left, final_metrics, problem, times);
   if (!a.metrics.empty()) {
     if (r.route == SphereRoute::Flow)
       j["conformal_metrics"] = metrics_json(map_metrics(mesh.V, r.conformal, mesh.F, Domain::sphere(), 32));
     write_json_file(a.metrics, j);
   }
-
-  if (!a.png.empty()) {
-    analysis::ScalarColouring c;
-    c.values = a.sulc.empty() ? sulcal_depth_proxy(mesh.V, mesh.F) : io::read_per_vertex(a.sulc, mesh.num_vertices());
-    c.colormap = "gray_r";
-    c.label = a.sulc.empty() ? "depth below smoothed surface (mm)" : "sulcal depth";
-    std::tie(c.vmin, c.vmax) = analysis::robust_range(c.values);
-    analysis::SurfaceRenderOptions so;
-    so.left_hemisphere = left;
-    so.title = problem.empty() ? "authalic sphere" : "FAILED acceptance: sphere map (kept for inspection)";
-    io::write_png(a.png, analysis::render_surface_views(out.V, out.F, c, {analysis::View::Lateral, analysis::View::Medial}, so));
-  }
+  if (!a.png.empty()) write_sphere_png(a, mesh, out, left, problem);
 
   std::ostringstream line;
   line << "sphere: " << a.out << " (radius " << radius << " mm): " << r.flips << " flipped faces, element CV "
