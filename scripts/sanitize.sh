@@ -12,6 +12,8 @@ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DAUTHALIC_SANITIZE=O
 cmake --build build-asan -j"$(nproc)"
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+# Third-party leaks only (fontconfig, through Cairo): scripts/lsan.supp says which and why.
+export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp"
 exclude=()
 [ "${SANITIZE_ALL:-0}" = 1 ] || exclude=(-E NativeResolution)
 ctest --test-dir build-asan --output-on-failure -j"$(nproc)" --timeout 1200 "${exclude[@]}"
