@@ -277,7 +277,8 @@ PanelMesh panel_mesh(const std::vector<const HemisphereSurface*>& parts, const S
   Eigen::Index ov = 0, of = 0;
   for (const HemisphereSurface* h : parts) {
     m.V.middleRows(ov, h->V.rows()) = h->V.leftCols(3);
-    m.F.middleRows(of, h->F.rows()) = h->F.array() + static_cast<int>(ov);
+    // (An empty face list may be 0 x 0, not 0 x 3: nothing to copy.)
+    if (h->F.rows() > 0) m.F.middleRows(of, h->F.rows()) = (h->F.array() + static_cast<int>(ov)).matrix();
     if (h->values.size() == h->V.rows()) m.colouring.values.segment(ov, h->V.rows()) = h->values;
     if (background) m.colouring.background.segment(ov, h->V.rows()) = h->background;
     ov += h->V.rows();
