@@ -70,8 +70,9 @@ $py "$evalmap" "$data/white_left.gii.gz" "$work/B1.init.surf.gii" --domain squar
 WALL_B1=$(wall B1) WALL_B2=$(wall B2) WALL_B3=$(wall B3) WALL_MESH=$(wall B1-mesh) \
 RSS_B1=$(rss B1) RSS_B2=$(rss B2) RSS_B3=$(rss B3) RSS_MESH=$(rss B1-mesh) SAME=$same WORK=$work CGAL=$cgal \
 CPU_B1=$(cpu B1) CPU_B2=$(cpu B2) CPU_B3=$(cpu B3) CPU_MESH=$(cpu B1-mesh) \
-$py - <<'EOF'
+PYTHONPATH=bench $py - <<'EOF'
 import json, os, numpy as np, nibabel as nib
+from requirements import Requirements
 w = os.environ['WORK']
 J = lambda n: json.load(open(f'{w}/{n}'))
 def uv(n):
@@ -116,13 +117,7 @@ print(f'threads: 1 vs 2 threads give {os.environ["SAME"]} outputs; seconds (init
 print(f'load average at the end: {open("/proc/loadavg").read().split()[0:3]} on {os.cpu_count()} cores (other work makes every wall time larger;'
       ' cpu = user + system seconds of the process, all threads)')
 print()
-ok = True
-def req(name, val, lim):
-    global ok
-    good = val <= lim
-    ok &= good
-    print(f'  {"PASS" if good else "FAIL"}  {name}: {val:.4g} (<= {lim})')
-print('requirements (issue 3):')
+req = Requirements('issue 3')
 for n in ['B1', 'B2', 'B3']:
     m = res[n]['metrics']
     req(f'{n} flips', m['flips'], 0)

@@ -93,8 +93,9 @@ echo "bench_peers: evalmap cross-checks" >&2
 "$py" ../shared/tools/evalmap.py "$fs5/white_left.gii.gz" "$work/S1.surf.gii" --domain sphere --json >"$work/S1.eval.json"
 "$py" ../shared/tools/evalmap.py "$fs741/lh.white.surf.gii" "$work/R1.uv.surf.gii" --domain square --k 32 --inserted auto --json >"$work/R1.eval.json"
 
-LOAD_START=$load_start WORK=$work "$py" - <<'PY'
+LOAD_START=$load_start WORK=$work PYTHONPATH=bench "$py" - <<'PY'
 import json, os, math, statistics
+from requirements import Requirements
 w = os.environ['WORK']
 def t(n):
     wall, user, sys_, rss = open(f'{w}/{n}.t').read().split()[-4:]
@@ -161,13 +162,7 @@ print(f'run: sample patient {rs["cpu"]:.2f} s CPU (1 thread, exit {rs["code"]});
       f' {rr["wall"]:.2f} s wall, {rr["cpu"]:.2f} s CPU (exit {rr["code"]})')
 print()
 
-ok = True
-def req(name, val, lim):
-    global ok
-    good = val <= lim
-    ok &= good
-    print(f'  {"PASS" if good else "FAIL"}  {name}: {val:.4g} (<= {lim})')
-print('requirements (issue 13):')
+req = Requirements('issue 13')
 face = lambda n: rows[n][0]['face_ln_area_abs']['mean']
 req('B1 per-face mean', face('B1'), 0.025)
 req('B1 element CV', rows['B1'][0]['element_cv'], 0.003)
@@ -188,5 +183,5 @@ req('2 threads / 1 thread wall (median of 3 pairs)', ratio, 1.0)
 req('serial share of a map (1 - parallel share)', 1 - share, 0.4)
 req('run sample CPU s', rs['cpu'], 1.5)
 req('run real subject wall s', rr['wall'], 20)
-print('all requirements met' if ok else 'some requirements are not met (FAIL above)')
+print('all requirements met' if req.ok else 'some requirements are not met (FAIL above)')
 PY
