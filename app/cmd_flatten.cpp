@@ -37,7 +37,7 @@ struct FlattenArgs {
   std::string sphere_reg, atlas_dir, atlas_surface, atlas_sphere, atlas_label, atlas_faces_from;
   std::string method = "grid";
   int k = 32;
-  int grid = 512;
+  int grid = 0;  // 0: from the region's size (grid_resolution_for)
   int passes = GridFlowOptions{}.max_passes;
   int fixed_steps = 0;
   int iterations = 200;
@@ -229,7 +229,8 @@ FlattenRegion read_region(const FlattenArgs& a, const io::Surface& surface) {
 // Memory and size limits, checked before minutes of mapping.
 void check_region_size(const FlattenArgs& a, const MatrixXi& region) {
   // A disk has about F / 2 vertices.
-  check_memory(a.surface, (region.rows() + 2) / 2, square_map_memory_bytes((region.rows() + 2) / 2, a.grid), a.max_memory);
+  check_memory(a.surface, (region.rows() + 2) / 2, square_map_memory_bytes((region.rows() + 2) / 2, a.grid > 0 ? a.grid : grid_resolution_for(region.rows())),
+               a.max_memory);
   // The default limit is a time limit: 600k vertices (fsaverage5 subdivided three times) map with 0
   // flips, element CV 0.0001, in 77 s CPU and 1.2 GB (bench/bench_peers.sh), while the 150k of a
   // native hemisphere take 8 s. Larger regions are refused up front unless asked for.
@@ -511,7 +512,9 @@ void setup(CLI::App& parent) {
   sub->add_option("--method", a->method, "Flow: grid (Moser flow on a DCT grid, default) or mesh (discrete Lie flow, DLF)")
       ->check(CLI::IsMember({"grid", "mesh"}))
       ->capture_default_str();
-  sub->add_option("--grid", a->grid, "Grid cells per side (grid method)")->check(in_range(16, 4096))->capture_default_str();
+  sub->add_option("--grid", a->grid,
+                  "Grid cells per side (grid method); default: 256 for regions up to 131,072 triangles, 512 above")
+      ->check(CLI::IsMember({0}) | in_range(16, 4096));
   sub->add_option("--passes", a->passes, "Maximum flow passes (grid method)")->check(in_range(0, 100))->capture_default_str();
   sub->add_option("--iterations", a->iterations, "Maximum steps (mesh method)")->check(in_range(0, 100000))->capture_default_str();
   sub->add_option("--fixed-steps", a->fixed_steps,

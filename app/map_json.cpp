@@ -104,7 +104,7 @@ nlohmann::json flow_json(const FlowReport& r, const FlowOptions& o) {
           {"converged", r.converged},
           {"stop_reason", r.stop_reason},
           {"tolerance", {{"vertex_ln_area_abs_mean", o.tolerance_mean}, {"vertex_ln_area_abs_p99", o.tolerance_p99}}},
-          {"grid_resolution", o.grid.resolution},
+          {"grid_resolution", r.grid_resolution},
           {"rk4_steps", o.grid.rk4_steps},
           {"fixed_steps", o.mesh.fixed_steps},
           {"edge_flips", r.edge_flips},
