@@ -229,7 +229,7 @@ FlattenRegion read_region(const FlattenArgs& a, const io::Surface& surface) {
 // Memory and size limits, checked before minutes of mapping.
 void check_region_size(const FlattenArgs& a, const MatrixXi& region) {
   // A disk has about F / 2 vertices.
-  check_memory(a.surface, (region.rows() + 2) / 2, square_map_memory_bytes((region.rows() + 2) / 2, a.grid > 0 ? a.grid : grid_resolution_for(region.rows())),
+  check_memory(a.surface, (region.rows() + 2) / 2, square_map_memory_bytes((region.rows() + 2) / 2, a.grid > 0 ? a.grid : kDefaultGridResolution),
                a.max_memory);
   // The default limit is a time limit: 600k vertices (fsaverage5 subdivided three times) map with 0
   // flips, element CV 0.0001, in 77 s CPU and 1.2 GB (bench/bench_peers.sh), while the 150k of a
@@ -513,7 +513,8 @@ void setup(CLI::App& parent) {
       ->check(CLI::IsMember({"grid", "mesh"}))
       ->capture_default_str();
   sub->add_option("--grid", a->grid,
-                  "Grid cells per side (grid method); default: 256 for regions up to 131,072 triangles, 512 above")
+                  "Grid cells per side (grid method); default: with the stretch start 256 for regions up to 131,072 "
+                  "triangles and 512 above, else 512")
       ->check(CLI::IsMember({0}) | in_range(16, 4096));
   sub->add_option("--passes", a->passes, "Maximum flow passes (grid method)")->check(in_range(0, 100))->capture_default_str();
   sub->add_option("--iterations", a->iterations, "Maximum steps (mesh method)")->check(in_range(0, 100000))->capture_default_str();

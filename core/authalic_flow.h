@@ -43,8 +43,8 @@ std::string to_string(FlowMethod m);
 
 // The Grid method's knobs (one Moser pass: rasterise, smooth, solve, advect).
 struct GridFlowOptions {
-  // Cells along the unit side (nx = round(W * resolution), ny = resolution); 0: from the mesh
-  // (grid_resolution_for).
+  // Cells along the unit side (nx = round(W * resolution), ny = resolution); 0: 512 here, and
+  // grid_resolution_for in the square map from its stretch-energy start (core/square_map.h).
   int resolution = 0;
   int rk4_steps = 20;            // RK4 steps over t in [0, 1] per pass (20 and 80 agree to 1e-3 on benchmark B1, docs/references.md)
   double smoothing_cells = 1.0;  // Gaussian standard deviation of the density smoothing, in cells
@@ -54,13 +54,16 @@ struct GridFlowOptions {
   double min_pass_gain = 0.95;   // stop after a pass that keeps more than this share of the error
 };
 
-// The grid flow's resolution for `faces` triangles on [0, W] x [0, 1]: 256 cells per unit side
-// while the region has at most 131,072 triangles per unit of height (two per cell), 512 above.
-// A finer grid than the mesh only adds rejected passes. Measured (flatten, 512 -> 256 cells): the
-// sample's phantom hemisphere (7,084 faces) flow 1.24 -> 0.29 s, element CV 0.0019 -> 0.0017
-// (4 rejected passes -> 0); B1 flow 0.80 -> 0.52 s, CV 0.00234 -> 0.00233; B2 CV 0.0025 -> 0.0021.
-// Native hemispheres (~300k faces: B3, fs741) keep 512.
+// The grid flow's resolution for `faces` triangles on [0, W] x [0, 1] from an almost authalic
+// start (the stretch-energy start): 256 cells per unit side while the region has at most 131,072
+// triangles per unit of height (two per cell), 512 above. A grid finer than the mesh only adds
+// rejected passes. Measured (flatten, 512 -> 256 cells): the sample's phantom hemisphere (7,084
+// faces) flow 1.24 -> 0.29 s, element CV 0.0019 -> 0.0017 (4 rejected passes -> 0); B1 flow 0.80
+// -> 0.52 s, CV 0.00234 -> 0.00233; B2 CV 0.0025 -> 0.0021. Native hemispheres (~300k faces: B3,
+// fs741) keep 512. Not for far-from-authalic starts (a conformal map of a cut-open closed surface
+// folded 434 triangles at 256; an atlas start moved 0.9 element instead of < 0.5): they keep 512.
 int grid_resolution_for(Eigen::Index faces, double width = 1.0);
+inline constexpr int kDefaultGridResolution = 512;
 
 // The Mesh method's knobs (DLF Algorithm 1 or Zou's fixed-K schedule).
 struct MeshFlowOptions {

@@ -201,6 +201,8 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
         << R.stretch.initial_log_stretch << " -> " << R.stretch.final_log_stretch;
     report(progress, "stretch", -1, msg.str());
   }
+  if (fo.grid.resolution <= 0 && opt.stretch_start && !given_start)
+    fo.grid.resolution = grid_resolution_for(init.F.rows(), opt.width);  // the start is almost authalic
   FlowResult flow = authalic_flow(init.V, init.F, start, init.side_mask, fo, progress);
   const VectorXd measure = target_face_measure(init.V, init.F, fo.density, opt.width);
   if (opt.optimal_transport) flow = refine_by_optimal_transport(init, measure, flow.UV, opt, fo, progress, &R.transport);
