@@ -437,6 +437,9 @@ void write_gim(gifti_image* gim, const std::string& final_path, const std::strin
   if (gz) xml_tmp.p = xml;
   std::lock_guard<std::mutex> lock(gifti_mutex());
   gifti_set_verb(0);
+  // zlib's fastest level: 3-4x faster than its default 6 for files about 10 % larger (benchmark
+  // B3: writing the map was 14 % of its time at level 6).
+  gifti_set_zlevel(1);
   if (gifti_write_image(gim, xml.c_str(), 1) != 0) throw std::runtime_error("gifticlib failed to write " + xml);
   GiftiPtr back(gifti_read_image(xml.c_str(), 1));
   bool same = back && back->numDA == gim->numDA;

@@ -60,6 +60,8 @@ bool encode(const RgbImage& image, std::vector<std::uint8_t>* out, std::string* 
   png_set_write_fn(png, &buf, write_to_vector, nullptr);
   png_set_IHDR(png, info, static_cast<png_uint_32>(image.width), static_cast<png_uint_32>(image.height), 8, PNG_COLOR_TYPE_RGB,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  // zlib's fastest level: PNG encoding at the default level 6 was a fifth of the sample run's CPU.
+  png_set_compression_level(png, 1);
   png_write_info(png, info);
   for (int y = 0; y < image.height; ++y)
     png_write_row(png, const_cast<png_bytep>(image.rgb.data() + static_cast<std::size_t>(y) * image.width * 3));
