@@ -229,8 +229,7 @@ FlattenRegion read_region(const FlattenArgs& a, const io::Surface& surface) {
 // Memory and size limits, checked before minutes of mapping.
 void check_region_size(const FlattenArgs& a, const MatrixXi& region) {
   // A disk has about F / 2 vertices.
-  check_memory(a.surface, (region.rows() + 2) / 2, square_map_memory_bytes((region.rows() + 2) / 2, a.grid > 0 ? a.grid : kDefaultGridResolution),
-               a.max_memory);
+  check_memory(a.surface, (region.rows() + 2) / 2, square_map_memory_bytes((region.rows() + 2) / 2, GridFlowOptions{a.grid}.cells()), a.max_memory);
   // The default limit is a time limit: 600k vertices (fsaverage5 subdivided three times) map with 0
   // flips, element CV 0.0001, in 77 s CPU and 1.2 GB (bench/bench_peers.sh), while the 150k of a
   // native hemisphere take 8 s. Larger regions are refused up front unless asked for.

@@ -70,17 +70,7 @@ timed run-sample run --id patient01 --lh-white sample_data/surf/lh.white --lh-pi
   --lh-cortex sample_data/label/lh.cortex.label --rh-cortex sample_data/label/rh.cortex.label \
   --pet sample_data/sub-patient01/sub-patient01_pet.nii.gz --normative sample_data/normative.json --age 68.2 \
   --out "$work/run-sample" --threads 1
-"$py" - "$fs741" "$work" <<'PY'
-import sys, numpy as np, nibabel as nib
-d, w = sys.argv[1:3]
-for s in ['white', 'pial']:
-    g = nib.load(f'{d}/lh.{s}.surf.gii')
-    P = [a for a in g.darrays if a.intent == 1008][0]; T = [a for a in g.darrays if a.intent == 1009][0]
-    Q = np.asarray(P.data, np.float32).copy(); Q[:, 0] *= -1  # mirror through the midsagittal plane
-    out = nib.gifti.GiftiImage(darrays=[nib.gifti.GiftiDataArray(Q, intent='NIFTI_INTENT_POINTSET', datatype='NIFTI_TYPE_FLOAT32'),
-                                        nib.gifti.GiftiDataArray(np.asarray(T.data, np.int32), intent='NIFTI_INTENT_TRIANGLE', datatype='NIFTI_TYPE_INT32')])
-    nib.save(out, f'{w}/rh.{s}.surf.gii')
-PY
+for s in white pial; do "$py" bench/mirror_hemisphere.py "$fs741/lh.$s.surf.gii" "$work/rh.$s.surf.gii"; done
 cp "$fs741/lh.cortex.label" "$work/rh.cortex.label"
 timed run-real run --id fs741 --lh-white "$fs741/lh.white.surf.gii" --lh-pial "$fs741/lh.pial.surf.gii" \
   --rh-white "$work/rh.white.surf.gii" --rh-pial "$work/rh.pial.surf.gii" \

@@ -36,18 +36,10 @@ timed phantom-patient01 '<= 5 s' --id patient01 \
   --pet sample_data/sub-patient01/sub-patient01_pet.nii.gz --normative sample_data/normative.json
 if [ -f ../shared/data/fsaverage5/white_left.gii.gz ]; then
   d=../shared/data/fsaverage5
-  /usr/bin/python3 - "$d" "$work" <<'PY'
-import sys, numpy as np, nibabel as nib
-d, w = sys.argv[1:3]
-for name in ['white', 'pial', 'flat']:
-    g = nib.load(f'{d}/{name}_left.gii.gz')
-    P = [a for a in g.darrays if a.intent == 1008][0]; T = [a for a in g.darrays if a.intent == 1009][0]
-    nib.save(g, f'{w}/lh.{name}.surf.gii')
-    Q = np.asarray(P.data, np.float32).copy(); Q[:, 0] *= -1  # mirror through the midsagittal plane
-    out = nib.gifti.GiftiImage(darrays=[nib.gifti.GiftiDataArray(Q, intent='NIFTI_INTENT_POINTSET', datatype='NIFTI_TYPE_FLOAT32'),
-                                        nib.gifti.GiftiDataArray(np.asarray(T.data, np.int32), intent='NIFTI_INTENT_TRIANGLE', datatype='NIFTI_TYPE_INT32')])
-    nib.save(out, f'{w}/rh.{name}.surf.gii')
-PY
+  for name in white pial flat; do
+    gunzip -c "$d/${name}_left.gii.gz" >"$work/lh.$name.surf.gii"
+    /usr/bin/python3 bench/mirror_hemisphere.py "$d/${name}_left.gii.gz" "$work/rh.$name.surf.gii"
+  done
   timed fsaverage5-lh+mirror-spm-pet '<= 10 s' --id fsaverage5 \
     --lh-white "$work/lh.white.surf.gii" --lh-pial "$work/lh.pial.surf.gii" \
     --rh-white "$work/rh.white.surf.gii" --rh-pial "$work/rh.pial.surf.gii" \

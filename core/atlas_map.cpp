@@ -297,7 +297,7 @@ AtlasSquare atlas_square_map(const MatrixXd& atlas_V, const MatrixXd& atlas_S, c
   // 512 cells): the atlas map is made on the same grid, so a subject identical to the atlas does
   // not move (with the stretch start's 256 cells here: up to 0.58 element on fsaverage5).
   SquareMapOptions o = options;
-  if (o.flow.grid.resolution <= 0) o.flow.grid.resolution = kDefaultGridResolution;
+  o.flow.grid.resolution = o.flow.grid.cells();
   A.map = square_map(atlas_V, atlas_F, o, progress);
   A.S = normalize_to_unit_sphere(extend_to_inserted(normalize_to_unit_sphere(atlas_S, "atlas sphere"), A.map.initial),
                                  "atlas sphere");

@@ -105,7 +105,7 @@ int grid_resolution_for(Eigen::Index faces, double width) {
 
 MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const MatrixXi& F, const VectorXi& side_mask,
                          double width, const GridFlowOptions& options, double fraction, const VectorXi& only_moving) {
-  const int resolution = options.resolution > 0 ? options.resolution : kDefaultGridResolution;
+  const int resolution = options.cells();
   const int rk4_steps = options.rk4_steps;
   const double smoothing_cells = options.smoothing_cells;
   const int ny = std::max(2, resolution);
@@ -926,7 +926,7 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
   FlowReport& rep = res.report;
   rep.method = opt.method;
   const double w = opt.width;
-  rep.grid_resolution = opt.grid.resolution > 0 ? opt.grid.resolution : kDefaultGridResolution;
+  rep.grid_resolution = opt.grid.cells();
   Flow s{V, F, side_mask, opt, progress, static_cast<int>(V.rows()), w, target_face_measure(V, F, opt.density, w),
          flip_area_threshold(w, F.rows()), UV0.leftCols(2), Stats{}, rep};
   s.cur = s.stats_of(s.UV);

@@ -41,6 +41,8 @@ namespace authalic {
 enum class FlowMethod { Grid, Mesh };
 std::string to_string(FlowMethod m);
 
+inline constexpr int kDefaultGridResolution = 512;
+
 // The Grid method's knobs (one Moser pass: rasterise, smooth, solve, advect).
 struct GridFlowOptions {
   // Cells along the unit side (nx = round(W * resolution), ny = resolution); 0: 512 here, and
@@ -52,6 +54,9 @@ struct GridFlowOptions {
   // white and pial): `flatten`, `run` and `rectangle` take this default (they had 3 and 6).
   int max_passes = 3;
   double min_pass_gain = 0.95;   // stop after a pass that keeps more than this share of the error
+
+  // The cells per unit side a pass uses: `resolution`, or the default when it is 0.
+  int cells() const { return resolution > 0 ? resolution : kDefaultGridResolution; }
 };
 
 // The grid flow's resolution for `faces` triangles on [0, W] x [0, 1] from an almost authalic
@@ -63,7 +68,6 @@ struct GridFlowOptions {
 // fs741) keep 512. Not for far-from-authalic starts (a conformal map of a cut-open closed surface
 // folded 434 triangles at 256; an atlas start moved 0.9 element instead of < 0.5): they keep 512.
 int grid_resolution_for(Eigen::Index faces, double width = 1.0);
-inline constexpr int kDefaultGridResolution = 512;
 
 // The Mesh method's knobs (DLF Algorithm 1 or Zou's fixed-K schedule).
 struct MeshFlowOptions {

@@ -48,7 +48,7 @@ inline SphereFlowOptions coarse_sphere_flow_options() {
 inline SquareMapOptions sphere_square_options() {
   SquareMapOptions o;
   o.flow.grid.max_passes = 6;
-  o.flow.grid.resolution = 512;
+  o.flow.grid.resolution = kDefaultGridResolution;
   return o;
 }
 
