@@ -190,9 +190,11 @@ const bool registered = register_command({45, [](CLI::App& parent) {
   sub->add_option("MAP", a->map, "Its authalic map (.surf.gii): x,y in the domain (or scaled), or a sphere")->required();
   sub->add_option("VALUES", a->values, "Per-vertex values, e.g. from `authalic sample` (.func.gii)")->required();
   sub->add_option("OUT_PREFIX", a->prefix, "Output prefix")->required();
-  add_k_option(*sub, a->k, {DomainKind::Square, DomainKind::Rectangle, DomainKind::Sphere});
-  sub->add_option("--domain", a->domain, "square, rectangle or sphere")
-      ->check(CLI::IsMember({"square", "rectangle", "sphere"}))
+  add_k_option(*sub, a->k, {DomainKind::Square, DomainKind::Rectangle, DomainKind::Sphere, DomainKind::Disk});
+  sub->add_option("--domain", a->domain,
+                  "square, rectangle, sphere or disk (the unit disk; elements: the square's cells carried by the "
+                  "concentric map)")
+      ->check(CLI::IsMember({"square", "rectangle", "sphere", "disk"}))
       ->capture_default_str();
   sub->add_option("--hemisphere", a->hemisphere, "left, right or both (default: from the surface's metadata or name)");
   sub->add_option("--subject", a->subject, "Subject id recorded in the table (used by `authalic normative`)");

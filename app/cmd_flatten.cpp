@@ -16,6 +16,7 @@
 #include "app/command.h"
 #include "app/map_json.h"
 #include "app/memory_guard.h"
+#include "core/disk_map.h"
 #include "core/error.h"
 #include "core/metrics.h"
 #include "core/region.h"
@@ -36,6 +37,7 @@ struct FlattenArgs {
   // Atlas correspondence (issue 14): the subject's sphere.reg and the atlas.
   std::string sphere_reg, atlas_dir, atlas_surface, atlas_sphere, atlas_label, atlas_faces_from;
   std::string method = "grid";
+  std::string domain = "square";  // or "disk" (the square map carried onto the disk, core/disk_map.h)
   int k = 32;
   int grid = 0;  // 0: from the region's size (grid_resolution_for)
   int passes = GridFlowOptions{}.max_passes;
@@ -262,12 +264,15 @@ SquareMapOptions square_map_options(const FlattenArgs& a, const TriMesh& mesh) {
 // conformal initial map. Returns the mm per unit-square unit.
 double write_flat_surfaces(const FlattenArgs& a, const io::Surface& surface, const SquareMapResult& r,
                            const std::string& region_source, const std::string& problem, const nlohmann::json& correspondence) {
-  const double scale = std::sqrt(r.surface_area / r.width);
+  const bool disk = a.domain == "disk";
+  const double scale = std::sqrt(r.surface_area / (disk ? Domain::disk().area() : r.width));
   io::SurfaceWriteOptions wo;
   wo.geometric_type = "Flat";
   const auto structure = surface.metadata.find("AnatomicalStructurePrimary");
   if (structure != surface.metadata.end()) wo.anatomical_structure = structure->second;
-  wo.metadata = {{"authalic_map", "square (authalic, Lie advection / Moser flow)"},
+  wo.metadata = {{"authalic_map", disk ? "disk (authalic: the square map carried by Shirley & Chiu's concentric map, then a "
+                                         "per-face polish with the boundary sliding on the circle)"
+                                       : "square (authalic, Lie advection / Moser flow)"},
                  {"authalic_orientation", kOrientationRule},
                  {"authalic_source", a.surface},
                  {"authalic_region", region_source},
@@ -277,13 +282,16 @@ double write_flat_surfaces(const FlattenArgs& a, const io::Surface& surface, con
                  {"authalic_correspondence", correspondence["mode"].get<std::string>()}};
   if (r.initial.inserted_parents.rows() > 0)
     wo.metadata[kInsertedVerticesKey] = inserted_vertices_text(r.initial.inserted_parents, r.initial.inserted_weight);
+  const std::string units = disk ? "unit disk centred at the origin (x right, y up)" : "unit square [0,1]^2 (x right, y up)";
   write_flat(a.out, r.UV * scale, r.F, wo,
-             "mm: the flat square's area equals the cortical area (" + std::to_string(r.surface_area) + " mm^2)");
-  if (!a.uv.empty()) write_flat(a.uv, r.UV, r.F, wo, "unit square [0,1]^2 (x right, y up)");
+             std::string("mm: the flat ") + (disk ? "disk" : "square") + "'s area equals the cortical area (" +
+                 std::to_string(r.surface_area) + " mm^2)");
+  if (!a.uv.empty()) write_flat(a.uv, r.UV, r.F, wo, units);
   if (!a.initial.empty()) {
     io::SurfaceWriteOptions wi = wo;
-    wi.metadata["authalic_map"] = "square (conformal initial map)";
-    write_flat(a.initial, r.UV_initial, r.F, wi, "unit square [0,1]^2 (x right, y up)");
+    wi.metadata["authalic_map"] = disk ? "disk (the square's conformal initial map carried by the concentric map)"
+                                       : "square (conformal initial map)";
+    write_flat(a.initial, r.UV_initial, r.F, wi, units);
   }
   return scale;
 }
@@ -367,8 +375,15 @@ void write_map_png(const FlattenArgs& a, const TriMesh& mesh, const SquareMapRes
   c.colormap = "gray_r";
   std::tie(c.vmin, c.vmax) = analysis::robust_range(c.values);
   analysis::FlatRenderOptions fo;
-  fo.grid_cols = fo.grid_rows = a.k;
-  fo.title = "authalic map, " + std::to_string(a.k) + "x" + std::to_string(a.k) + " elements";
+  if (a.domain == "disk") {
+    // The disk's elements are curved (square cells carried by the concentric map): not drawn.
+    fo.x0 = fo.y0 = -1.0;
+    fo.domain_width = fo.domain_height = 2.0;
+    fo.title = "authalic disk map";
+  } else {
+    fo.grid_cols = fo.grid_rows = a.k;
+    fo.title = "authalic map, " + std::to_string(a.k) + "x" + std::to_string(a.k) + " elements";
+  }
   io::write_png(a.png, analysis::render_flat(r.UV, r.F, c, fo));
 }
 
@@ -405,13 +420,16 @@ void run(const FlattenArgs& a) {
   } catch (const ProcessingError& e) {
     throw ProcessingError(a.surface + " (" + region.source + "): " + e.what() + " (--grid 1024)");
   }
+  DiskMapReport disk;
+  if (a.domain == "disk") carry_square_map_to_disk(r, options.density, DiskMapOptions{}, &disk, clock.progress());
   clock.stop();
   const double seconds_map = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Acceptance (core/metrics.h) before anything is written: a map that is not authalic is a
   // failure (exit 3), never a success with a note.
-  const MapMetrics final_metrics = map_metrics(r.V, r.UV, r.F, Domain::square(), a.k);
-  const MapMetrics accept_metrics = a.k == 32 ? final_metrics : map_metrics(r.V, r.UV, r.F, Domain::square(), 32);
+  const Domain domain = Domain::of(parse_domain_kind(a.domain, "--domain"));
+  const MapMetrics final_metrics = map_metrics(r.V, r.UV, r.F, domain, a.k);
+  const MapMetrics accept_metrics = a.k == 32 ? final_metrics : map_metrics(r.V, r.UV, r.F, domain, 32);
   // The per-vertex limit is checked on the number the user is shown (the metrics); with a
   // density the target is not the surface area, so the flow's density-weighted one is used.
   const bool plain = options.density.size() == 0;
@@ -429,8 +447,18 @@ void run(const FlattenArgs& a) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const FlattenTimes times{seconds_map, clock.seconds("initial"), clock.seconds("stretch") + clock.seconds("flow"), seconds};
   nlohmann::json j = flatten_json(a, r, options, region, scale, final_metrics, problem, correspondence, times);
+  j["domain"] = a.domain;
+  if (a.domain == "disk")
+    j["disk"] = {{"carry", "Shirley & Chiu's concentric map of the square map (area x pi/4 everywhere)"},
+                 {"inserted_vertices", disk.inserted_vertices},
+                 {"carried_flips", disk.carried_flips},
+                 {"untangled_vertices", disk.untangled_vertices},
+                 {"face_ln_area_abs_mean_carried", disk.carried_face_error},
+                 {"face_ln_area_abs_mean_polished", disk.face_error},
+                 {"polish_iterations", disk.polish_iterations},
+                 {"elements", "the K x K cells of the square carried onto the disk by the concentric map (equal area)"}};
   if (!a.metrics.empty()) {
-    j["initial_metrics"] = metrics_json(map_metrics(r.V, r.UV_initial, r.F, Domain::square(), a.k));
+    j["initial_metrics"] = metrics_json(map_metrics(r.V, r.UV_initial, r.F, domain, a.k));
     write_json_file(a.metrics, j);
   }
   if (!a.png.empty()) write_map_png(a, mesh, r);
@@ -507,7 +535,14 @@ void setup(CLI::App& parent) {
   sub->add_option("--density", a->density,
                   "Per-vertex density (GIFTI shape / FreeSurfer curv / text, > 0): a region of density 2 gets twice its "
                   "natural share of the square");
-  add_k_option(*sub, a->k, {DomainKind::Square});
+  add_k_option(*sub, a->k, {DomainKind::Square, DomainKind::Disk});
+  sub->add_option("--domain", a->domain,
+                  "Target domain: square (the unit square) or disk (the unit disk, Zou et al. 2011a section 4.5.1: the "
+                  "square map carried by Shirley & Chiu's equal-area concentric map, boundary on the circle by arc length "
+                  "with the frontal pole at the top, then a per-face polish with the boundary sliding on the circle; its "
+                  "K x K elements are the square's cells carried the same way; docs/maps.md)")
+      ->check(CLI::IsMember({"square", "disk"}))
+      ->capture_default_str();
   sub->add_option("--method", a->method, "Flow: grid (Moser flow on a DCT grid, default) or mesh (discrete Lie flow, DLF)")
       ->check(CLI::IsMember({"grid", "mesh"}))
       ->capture_default_str();

@@ -87,7 +87,24 @@ void run(const MetricsArgs& a) {
   // scale and shift of the used vertices' bounding box (ratios do not depend on it; the element
   // grid does).
   bool rescaled = false;
-  if (domain.planar()) {
+  if (domain.kind == DomainKind::Disk) {
+    // A disk map (flatten --domain disk): centred at the origin, radius 1 (or mm: scaled to it).
+    double rmax = 0;
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(INFINITY), hi = -lo;
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const Eigen::Vector2d p = U.row(F(f, c)).head<2>().transpose();
+        rmax = std::max(rmax, p.norm()), lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+      }
+    if (!(rmax > 0) || (lo + hi).norm() / 2 > 0.05 * rmax)
+      throw InputError(a.map + ": is not a disk map centred at the origin (bounding box centre (" +
+                       std::to_string((lo.x() + hi.x()) / 2) + ", " + std::to_string((lo.y() + hi.y()) / 2) +
+                       ") for radius " + std::to_string(rmax) + "); give the map written by `authalic flatten --domain disk`");
+    if (std::abs(rmax - 1) > 1e-6) {
+      U.leftCols(2) /= rmax;
+      rescaled = true;
+    }
+  } else if (domain.planar()) {
     const double W = domain.width();
     std::vector<char> used(known, 0);
     for (Eigen::Index f = 0; f < F.rows(); ++f)
@@ -139,10 +156,12 @@ void setup(CLI::App& parent) {
   sub->add_option("SURFACE", a->surface, "The 3D surface (mm)")->required();
   sub->add_option("MAP", a->map, "The map on the same vertex indexing (GIFTI or any surface format); its triangles are used")
       ->required();
-  sub->add_option("--domain", a->domain, "Map domain: square [0,1]^2, rectangle [0,2]x[0,1], or sphere")
-      ->check(CLI::IsMember({"square", "rectangle", "sphere"}))
+  sub->add_option("--domain", a->domain,
+                  "Map domain: square [0,1]^2, rectangle [0,2]x[0,1], sphere, or disk (the unit disk centred at the origin; "
+                  "its elements are the square's K x K cells carried by Shirley & Chiu's equal-area concentric map)")
+      ->check(CLI::IsMember({"square", "rectangle", "sphere", "disk"}))
       ->capture_default_str();
-  add_k_option(*sub, a->k, {DomainKind::Square, DomainKind::Rectangle, DomainKind::Sphere});
+  add_k_option(*sub, a->k, {DomainKind::Square, DomainKind::Rectangle, DomainKind::Sphere, DomainKind::Disk});
   add_common_options(*sub);
   sub->callback([a]() { run(*a); });
 }

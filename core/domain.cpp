@@ -3,6 +3,7 @@
 
 #include <algorithm>
 
+#include "core/concentric_map.h"
 #include "core/error.h"
 
 namespace authalic {
@@ -12,6 +13,7 @@ std::string to_string(DomainKind kind) {
     case DomainKind::Square: return "square";
     case DomainKind::Rectangle: return "rectangle";
     case DomainKind::Sphere: return "sphere";
+    case DomainKind::Disk: return "disk";
   }
   return "square";
 }
@@ -20,7 +22,8 @@ DomainKind parse_domain_kind(const std::string& name, const std::string& what) {
   if (name == "square") return DomainKind::Square;
   if (name == "rectangle" || name == "rect") return DomainKind::Rectangle;
   if (name == "sphere") return DomainKind::Sphere;
-  throw InputError(what + ": unknown domain '" + name + "'; use square, rectangle or sphere");
+  if (name == "disk") return DomainKind::Disk;
+  throw InputError(what + ": unknown domain '" + name + "'; use square, rectangle, sphere or disk");
 }
 
 double wrap_rectangle_perimeter(double s, double width) {
@@ -51,6 +54,10 @@ Eigen::Vector3d Domain::constrain(const Eigen::Vector3d& p) const {
     const double r = p.norm();
     return r > 0 ? Eigen::Vector3d(p / r) : Eigen::Vector3d(0, 0, 1);
   }
+  if (kind == DomainKind::Disk) {
+    const double r = std::hypot(p.x(), p.y());
+    return r > 1 ? Eigen::Vector3d(p.x() / r, p.y() / r, 0.0) : Eigen::Vector3d(p.x(), p.y(), 0.0);
+  }
   return {std::clamp(p.x(), 0.0, width()), std::clamp(p.y(), 0.0, 1.0), 0.0};
 }
 
@@ -60,6 +67,7 @@ Eigen::Vector2d Domain::grid_coordinates(const double* p) const {
     const double z = r > 0 ? p[2] / r : 0.0;
     return {(std::atan2(p[1], p[0]) + M_PI) / (2 * M_PI), (z + 1) / 2};
   }
+  if (kind == DomainKind::Disk) return (concentric_disk_to_square(p[0], p[1]).array() + 1.0) / 2.0;
   return {p[0] / width(), p[1]};
 }
 
@@ -78,6 +86,7 @@ std::vector<OverlapPiece> Domain::element_overlap(const MatrixXd& D, const Matri
     s.bands = element_rows(k);
     return sphere_grid_overlap(D, F, s);
   }
+  if (kind == DomainKind::Disk) return disk_grid_overlap(D, F, element_cols(k), element_rows(k));
   GridSpec g;
   g.cols = element_cols(k);
   g.rows = element_rows(k);

@@ -11,6 +11,10 @@
 //    core/rectangle_map.h); one cut-open surface has no seam (seam_x NaN).
 //  - Sphere: the unit sphere; elements 2K longitude sectors x K bands equal in z (equal area,
 //    Archimedes), in (u, v) = ((longitude + pi) / (2 pi), (z + 1) / 2) coordinates.
+//  - Disk: the unit disk centred at the origin (Zou et al. 2011a section 4.5.1), one hemisphere;
+//    elements the K x K cells of the square carried onto the disk by Shirley & Chiu's concentric
+//    map (core/concentric_map.h: equal-area, so the cells stay equal), in (u, v) = the point's
+//    preimage in [0, 1]^2.
 // Element id = row * cols + col, row 0 at the bottom (y = 0, z = -1), column 0 at x = 0
 // (longitude -pi).
 #include <algorithm>
@@ -24,10 +28,10 @@
 
 namespace authalic {
 
-enum class DomainKind { Square, Rectangle, Sphere };
-// "square", "rectangle", "sphere".
+enum class DomainKind { Square, Rectangle, Sphere, Disk };
+// "square", "rectangle", "sphere", "disk".
 std::string to_string(DomainKind kind);
-// Parses "square" | "rectangle" (or "rect") | "sphere"; throws InputError("<what>: ...") otherwise.
+// Parses "square" | "rectangle" (or "rect") | "sphere" | "disk"; throws InputError("<what>: ...") otherwise.
 DomainKind parse_domain_kind(const std::string& name, const std::string& what);
 
 // Side bits of a boundary vertex of a planar domain (corners carry two).
@@ -65,25 +69,34 @@ struct Domain {
   static Domain square() { return {DomainKind::Square, 1.0}; }
   static Domain rectangle(double seam_x = 1.0) { return {DomainKind::Rectangle, seam_x}; }
   static Domain sphere() { return {DomainKind::Sphere, 1.0}; }
+  static Domain disk() { return {DomainKind::Disk, 1.0}; }
   static Domain of(DomainKind kind) { return {kind, 1.0}; }
 
   bool planar() const { return kind != DomainKind::Sphere; }
-  // Extent along x of the planar domain [0, width] x [0, 1] (the element grid's (u, v) extent for
-  // the sphere: 2 x 1, as its 2K x K cells).
+  // The planar domains that are rectangles [0, width] x [0, 1] (square and rectangle).
+  bool rectangular() const { return kind == DomainKind::Square || kind == DomainKind::Rectangle; }
+  // Extent along x of the rectangular domain [0, width] x [0, 1] (the element grid's (u, v) extent
+  // for the sphere: 2 x 1, as its 2K x K cells; the disk's diameter).
   double width() const { return kind == DomainKind::Square ? 1.0 : 2.0; }
-  // Area: W for planar kinds, 4 pi (steradians) for the sphere.
-  double area() const { return planar() ? width() : 4.0 * M_PI; }
-  // Boundary of a planar domain (see rectangle_perimeter_point).
+  // The planar domain's bounding box [x0, x0 + width] x [y0, y0 + height]: [0, W] x [0, 1], the
+  // disk's [−1, 1]^2.
+  double x0() const { return kind == DomainKind::Disk ? -1.0 : 0.0; }
+  double y0() const { return kind == DomainKind::Disk ? -1.0 : 0.0; }
+  double height() const { return kind == DomainKind::Disk ? 2.0 : 1.0; }
+  // Area: W for rectangular kinds, pi for the disk, 4 pi (steradians) for the sphere.
+  double area() const { return kind == DomainKind::Disk ? M_PI : planar() ? width() : 4.0 * M_PI; }
+  // Boundary of a rectangular domain (see rectangle_perimeter_point).
   double perimeter() const { return rectangle_perimeter(width()); }
   Eigen::Vector2d boundary_point(double s) const { return rectangle_perimeter_point(s, width()); }
-  // A point of the domain nearest to p (planar: clamped onto [0, W] x [0, 1]; sphere: p / |p|, or
-  // the north pole for p = 0).
+  // A point of the domain nearest to p (rectangular: clamped onto [0, W] x [0, 1]; disk: p / |p|
+  // when |p| > 1; sphere: p / |p|, or the north pole for p = 0).
   Eigen::Vector3d constrain(const Eigen::Vector3d& p) const;
 
   // ---- the element grid at resolution K ----
-  int element_cols(int k) const { return kind == DomainKind::Square ? k : 2 * k; }
+  int element_cols(int k) const { return kind == DomainKind::Square || kind == DomainKind::Disk ? k : 2 * k; }
   int element_rows(int k) const { return k; }
-  // (u, v) in [0, 1]^2 of a domain point (planar: (x / W, y); sphere: longitude and z as above).
+  // (u, v) in [0, 1]^2 of a domain point (rectangular: (x / W, y); sphere: longitude and z as
+  // above; disk: the concentric map's preimage).
   Eigen::Vector2d grid_coordinates(const double* point) const;
   // Element id of a domain point (clamped onto the domain's edges).
   int element_of_point(int k, const double* point) const;

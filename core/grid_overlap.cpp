@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/concentric_map.h"
+
 namespace authalic {
 
 namespace {
@@ -399,6 +401,103 @@ std::vector<OverlapPiece> sphere_grid_overlap(const MatrixXd& S, const MatrixXi&
         out.push_back(piece);
       }
     }
+  });
+}
+
+namespace {
+
+// Disk maps are clipped in the square [0, 1]^2 that the concentric map (core/concentric_map.h)
+// carries onto the unit disk: there the disk's cells are a regular grid, and every area is the
+// disk's divided by π. A straight disk edge is a curve in the square, followed by bisection to
+// 1e-11 of the square's area (a 32 x 32 cell is 1e-3), at most 7 levels, as on the sphere.
+constexpr double kDiskCurveAreaTolerance = 1e-11;
+
+Pt disk_to_unit_square(const Eigen::Vector2d& d) {
+  const Eigen::Vector2d s = concentric_disk_to_square(d.x(), d.y());
+  return {0.5 * (s.x() + 1.0), 0.5 * (s.y() + 1.0)};
+}
+
+// Sector of the concentric map a disk point lies in (0: |a| > |b|, a > 0; then counter-clockwise).
+int concentric_sector(const Eigen::Vector2d& d) {
+  const double phi = std::atan2(d.y(), d.x());
+  return static_cast<int>(std::floor((phi + M_PI / 4) / (M_PI / 2) + 4)) % 4;
+}
+
+void follow_disk_segment(const Eigen::Vector2d& a, const Pt& pa, const Eigen::Vector2d& b, const Pt& pb, int depth,
+                         ArcPoly& poly) {
+  constexpr int kMaxDepth = 7;
+  if (depth >= kMaxDepth) return;
+  const Eigen::Vector2d m = 0.5 * (a + b);
+  const Pt pm = disk_to_unit_square(m);
+  const double cx = pb.x - pa.x, cy = pb.y - pa.y, chord = std::sqrt(cx * cx + cy * cy);
+  if (chord < 1e-12) return;
+  const double deviation = std::abs(cx * (pm.y - pa.y) - cy * (pm.x - pa.x)) / chord;
+  if (deviation * chord <= kDiskCurveAreaTolerance) return;
+  follow_disk_segment(a, pa, m, pm, depth + 1, poly);
+  poly.push_back(pm);
+  follow_disk_segment(m, pm, b, pb, depth + 1, poly);
+}
+
+}  // namespace
+
+std::vector<OverlapPiece> disk_grid_overlap(const MatrixXd& D, const MatrixXi& F, int cols, int rows) {
+  const double cw = 1.0 / cols, rh = 1.0 / rows;
+  return collect_pieces(F.rows(), [&](int f, std::vector<OverlapPiece>& out) {
+    Eigen::Vector2d d[3];
+    Pt s[3];
+    for (int k = 0; k < 3; ++k) {
+      d[k] = D.row(F(f, k)).head<2>().transpose();
+      s[k] = disk_to_unit_square(d[k]);
+    }
+    // A face inside one sector of the concentric map (where it is smooth) and, with its edges'
+    // midpoints and twice their deviation as a margin, inside one cell: one piece, with the face's
+    // exact disk area. Most faces of a fine mesh.
+    const int sector = concentric_sector(d[0]);
+    if (sector == concentric_sector(d[1]) && sector == concentric_sector(d[2])) {
+      double xmin = std::min({s[0].x, s[1].x, s[2].x}), xmax = std::max({s[0].x, s[1].x, s[2].x});
+      double ymin = std::min({s[0].y, s[1].y, s[2].y}), ymax = std::max({s[0].y, s[1].y, s[2].y});
+      double margin = 1e-12;
+      for (int k = 0; k < 3; ++k) {
+        const int j = (k + 1) % 3;
+        const Pt m = disk_to_unit_square(0.5 * (d[k] + d[j]));
+        xmin = std::min(xmin, m.x), xmax = std::max(xmax, m.x), ymin = std::min(ymin, m.y), ymax = std::max(ymax, m.y);
+        const double cx = s[j].x - s[k].x, cy = s[j].y - s[k].y, chord = std::sqrt(cx * cx + cy * cy);
+        if (chord > 0) margin = std::max(margin, 2.0 * std::abs(cx * (m.y - s[k].y) - cy * (m.x - s[k].x)) / chord);
+      }
+      const int c0 = static_cast<int>(std::floor((xmin - margin) / cw)), c1 = static_cast<int>(std::floor((xmax + margin) / cw));
+      const int r0 = static_cast<int>(std::floor((ymin - margin) / rh)), r1 = static_cast<int>(std::floor((ymax + margin) / rh));
+      if (c0 == c1 && r0 == r1 && c0 >= 0 && c0 < cols && r0 >= 0 && r0 < rows) {
+        const double area = 0.5 * std::abs((d[1] - d[0]).x() * (d[2] - d[0]).y() - (d[1] - d[0]).y() * (d[2] - d[0]).x());
+        if (area > 0) {
+          OverlapPiece op;
+          op.face = f;
+          op.cell = r0 * cols + c0;
+          op.domain_area = area;
+          op.bary[0] = op.bary[1] = op.bary[2] = 1.0 / 3.0;
+          out.push_back(op);
+        }
+        return;
+      }
+    }
+    ArcPoly poly;
+    for (int k = 0; k < 3; ++k) {
+      const int j = (k + 1) % 3;
+      poly.push_back(s[k]);
+      follow_disk_segment(d[k], s[k], d[j], s[j], 0, poly);
+    }
+    clip_into_cells(poly, 0.0, cw, 0, cols, 0.0, rh, rows, [&](int col, int row, const ArcPoly& piece) {
+      Pt centroid;
+      const double area = M_PI * std::abs(polygon_area_centroid(piece, &centroid));
+      if (!(area > 0)) return;
+      OverlapPiece op;
+      op.face = f;
+      op.cell = row * cols + col;
+      op.domain_area = area;
+      // The centroid back on the disk, in the flat triangle's barycentric coordinates.
+      const Eigen::Vector2d q = concentric_square_to_disk(2.0 * centroid.x - 1.0, 2.0 * centroid.y - 1.0);
+      barycentric({q.x(), q.y()}, {d[0].x(), d[0].y()}, {d[1].x(), d[1].y()}, {d[2].x(), d[2].y()}, op.bary);
+      out.push_back(op);
+    });
   });
 }
 

@@ -46,6 +46,16 @@ struct SphereGridSpec {
 // steradians) is that of the spherical triangle's part in the cell.
 std::vector<OverlapPiece> sphere_grid_overlap(const MatrixXd& S, const MatrixXi& F, const SphereGridSpec& grid);
 
+// Equal-area cells on the unit disk: the cols x rows cells of the square [−1, 1]^2 carried onto
+// the disk by Shirley & Chiu's concentric map (core/concentric_map.h: area x π/4 everywhere, so
+// equal cells stay equal, π / (cols rows) each). Cell id = row * cols + col, row 0 at the bottom
+// (y = −1) of the square. Pieces of every triangle of a disk map D (#V x >=2, the unit disk
+// centred at the origin): clipped in the square, where the triangle's straight edges are curves,
+// followed to 1e-11 of its area; domain_area is the piece's area on the disk (so a face's pieces
+// add up to its disk area to that tolerance), bary the piece centroid's barycentric coordinates
+// in the flat disk triangle. Parts outside the disk are dropped.
+std::vector<OverlapPiece> disk_grid_overlap(const MatrixXd& D, const MatrixXi& F, int cols, int rows);
+
 // Cortical area (surface units^2, mm^2 for cortex) that each cell receives: sum over pieces of
 // face_area_3d(face) * piece.domain_area / face_domain_area(face).
 VectorXd cell_surface_areas(const std::vector<OverlapPiece>& pieces, const VectorXd& face_area_3d,

@@ -139,31 +139,6 @@ int open_thin_sphere_triangles(MatrixXd& S, const MatrixXi& F, int max_rounds = 
 
 }  // namespace
 
-MatrixXd concentric_square_to_disk(const MatrixXd& P) {
-  MatrixXd D(P.rows(), 2);
-  const double q = M_PI / 4.0;
-  for (Eigen::Index i = 0; i < P.rows(); ++i) {
-    const double a = P(i, 0), b = P(i, 1);
-    double r = 0, phi = 0;
-    if (a > -b) {
-      if (a > b) {
-        r = a, phi = q * (b / a);
-      } else {
-        r = b, phi = q * (2.0 - a / b);
-      }
-    } else {
-      if (a < b) {
-        r = -a, phi = q * (4.0 + b / a);
-      } else {
-        r = -b, phi = b != 0 ? q * (6.0 - a / b) : 0.0;
-      }
-    }
-    D(i, 0) = r * std::cos(phi);
-    D(i, 1) = r * std::sin(phi);
-  }
-  return D;
-}
-
 MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const SphereFromSquareOptions& opt,
                                 SphereFromSquareReport* rep, const ProgressFn& progress) {
   SphereFromSquareReport local;

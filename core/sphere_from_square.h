@@ -17,6 +17,7 @@
 // The seam is the circle z = 1 − 2 a_B on both sides (a_B: B's share of the area). The joined
 // map is finished on the sphere: flips repaired, one coarse Moser pass (core/sphere_flow.h) for
 // the parts' boundary layers along the seam, and the per-face polish.
+#include "core/concentric_map.h"
 #include "core/crushed_patches.h"
 #include "core/mesh.h"
 #include "core/progress.h"
@@ -79,9 +80,5 @@ struct SphereFromSquareReport {
 // cut does not give two disks or a part's map folds.
 MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const SphereFromSquareOptions& options = {},
                                 SphereFromSquareReport* report = nullptr, const ProgressFn& progress = {});
-
-// Shirley & Chiu 1997 concentric map of [−1, 1]^2 onto the unit disk: the square's concentric
-// squares go to concentric circles, area scaled by π/4 everywhere. Inputs/outputs: #P x 2.
-MatrixXd concentric_square_to_disk(const MatrixXd& P);
 
 }  // namespace authalic

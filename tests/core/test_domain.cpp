@@ -24,14 +24,14 @@ TEST(Domain, ExtentAreaAndElementGridOfEachKind) {
 }
 
 TEST(Domain, NamesRoundTripAndAnUnknownNameIsRefusedNamingTheSource) {
-  for (DomainKind k : {DomainKind::Square, DomainKind::Rectangle, DomainKind::Sphere})
+  for (DomainKind k : {DomainKind::Square, DomainKind::Rectangle, DomainKind::Sphere, DomainKind::Disk})
     EXPECT_EQ(parse_domain_kind(to_string(k), "x"), k);
   EXPECT_EQ(parse_domain_kind("rect", "x"), DomainKind::Rectangle);
   try {
     parse_domain_kind("disc", "map.json: domain");
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()), "map.json: domain: unknown domain 'disc'; use square, rectangle or sphere");
+    EXPECT_EQ(std::string(e.what()), "map.json: domain: unknown domain 'disc'; use square, rectangle, sphere or disk");
   }
 }
 
