@@ -245,17 +245,10 @@ ElementMap prepare_element_map(const MatrixXd& V, const MatrixXi& F, const Matri
       m.notes.push_back("sphere map radii vary by up to " + fmt(100 * worst, 3) + "%; vertices were projected onto the unit sphere");
   } else if (domain.kind == DomainKind::Disk) {
     // The unit disk centred at the origin (flatten --domain disk; its mm map is scaled to radius 1).
-    double rmax = 0;
-    for (int v = 0; v < nm; ++v)
-      if (used[static_cast<std::size_t>(v)]) rmax = std::max(rmax, map_V.row(v).head<2>().norm());
-    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-    int n = 0;
-    for (int v = 0; v < nm; ++v)
-      if (used[static_cast<std::size_t>(v)]) centre += map_V.row(v).head<2>().transpose(), ++n;
-    centre /= std::max(1, n);
-    if (!(rmax > 0) || centre.norm() > 0.2 * rmax)
-      throw InputError(map_name + ": not a disk map centred at the origin (mean vertex at distance " + fmt(centre.norm()) +
-                       " for radius " + fmt(rmax) + "); give the map of `authalic flatten --domain disk` or choose --domain");
+    std::string problem;
+    const double rmax = disk_map_radius(map_V, map_F, &problem);
+    if (!problem.empty())
+      throw InputError(map_name + ": is " + problem + "; give the map of `authalic flatten --domain disk` or choose --domain");
     m.D = map_V.leftCols(2) / rmax;
     if (std::abs(rmax - 1) > 1e-6) m.notes.push_back("the disk map was scaled from radius " + fmt(rmax) + " to 1");
   } else {

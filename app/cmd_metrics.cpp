@@ -89,17 +89,10 @@ void run(const MetricsArgs& a) {
   bool rescaled = false;
   if (domain.kind == DomainKind::Disk) {
     // A disk map (flatten --domain disk): centred at the origin, radius 1 (or mm: scaled to it).
-    double rmax = 0;
-    Eigen::Vector2d lo = Eigen::Vector2d::Constant(INFINITY), hi = -lo;
-    for (Eigen::Index f = 0; f < F.rows(); ++f)
-      for (int c = 0; c < 3; ++c) {
-        const Eigen::Vector2d p = U.row(F(f, c)).head<2>().transpose();
-        rmax = std::max(rmax, p.norm()), lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-      }
-    if (!(rmax > 0) || (lo + hi).norm() / 2 > 0.05 * rmax)
-      throw InputError(a.map + ": is not a disk map centred at the origin (bounding box centre (" +
-                       std::to_string((lo.x() + hi.x()) / 2) + ", " + std::to_string((lo.y() + hi.y()) / 2) +
-                       ") for radius " + std::to_string(rmax) + "); give the map written by `authalic flatten --domain disk`");
+    std::string problem;
+    const double rmax = disk_map_radius(U, F, &problem);
+    if (!problem.empty())
+      throw InputError(a.map + ": is " + problem + "; give the map written by `authalic flatten --domain disk`");
     if (std::abs(rmax - 1) > 1e-6) {
       U.leftCols(2) /= rmax;
       rescaled = true;

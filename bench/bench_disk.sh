@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Issue 18 part 2 benchmark: the disk domain beside the square on the same inputs, B1 (fsaverage5
 # white_left with flat_left's cortex faces) and R1 (fs741 lh.white with lh.cortex.label): time,
-# per-face and per-vertex mean |ln area ratio|, element CV (32 x 32), flips; each disk map's
+# peak memory (MB), per-face and per-vertex mean |ln area ratio|, element CV (32 x 32), flips; each disk map's
 # element CV and per-face error also from bench/disk_elements.py (an independent estimate;
 # evalmap.py has no disk). Ends with PASS/FAIL for the requirements (0 flips, CV <= 0.005).
 #   bench/bench_disk.sh [BUILD_DIR]      (about 1 minute)
@@ -17,7 +17,7 @@ trap 'rm -rf "$work"' EXIT
 run() {  # NAME SURFACE DOMAIN N REGION_ARGS...
   local name=$1 surf=$2 domain=$3 n=$4
   shift 4
-  /usr/bin/time -f "%e %U %S" -o "$work/$name.t" "$bin" flatten "$surf" "$work/$name.surf.gii" --uv "$work/$name.uv.surf.gii" \
+  /usr/bin/time -f "%e %U %S %M" -o "$work/$name.t" "$bin" flatten "$surf" "$work/$name.surf.gii" --uv "$work/$name.uv.surf.gii" \
     --metrics "$work/$name.json" --domain "$domain" --threads 1 -q "$@"
   if [ "$domain" = disk ]; then "$py" bench/disk_elements.py "$surf" "$work/$name.uv.surf.gii" --n "$n" >"$work/$name.ind.json"; fi
 }
@@ -29,7 +29,7 @@ PYTHONPATH=bench "$py" - "$work" <<'PY'
 import json, sys, os
 from requirements import Requirements
 w = sys.argv[1]
-print(f"{'map':<10} {'CPU s':>6} {'per-face':>9} {'per-vertex':>10} {'element CV':>10} {'flips':>5} {'inserted':>8}  independent (disk_elements.py): CV, per-face")
+print(f"{'map':<10} {'CPU s':>6} {'MB':>5} {'per-face':>9} {'per-vertex':>10} {'element CV':>10} {'flips':>5} {'inserted':>8}  independent (disk_elements.py): CV, per-face")
 rows = {}
 for name in ['B1-square', 'B1-disk', 'R1-square', 'R1-disk']:
     j = json.load(open(f'{w}/{name}.json')); m = j['metrics']
@@ -37,7 +37,7 @@ for name in ['B1-square', 'B1-disk', 'R1-square', 'R1-disk']:
     ind = json.load(open(f'{w}/{name}.ind.json')) if os.path.exists(f'{w}/{name}.ind.json') else None
     rows[name] = m
     extra = f"  {ind['element_cv']:.5f}, {ind['face_ln_area_abs_mean']:.5f} (n = {ind['subdivision']})" if ind else ''
-    print(f"{name:<10} {cpu:6.2f} {m['face_ln_area_abs']['mean']:9.5f} {m['vertex_ln_area_abs']['mean']:10.5f} "
+    print(f"{name:<10} {cpu:6.2f} {float(t[3]) / 1024:5.0f} {m['face_ln_area_abs']['mean']:9.5f} {m['vertex_ln_area_abs']['mean']:10.5f} "
           f"{m['element_cv']:10.5f} {m['flips']:5d} {j.get('disk', {}).get('inserted_vertices', 0):8d}{extra}")
 req = Requirements('issue 18 part 2: the disk')
 for s in ['B1', 'R1']:

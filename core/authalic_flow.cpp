@@ -51,19 +51,6 @@ double face_log_ratio_mean(const VectorXd& target, const MatrixXd& UV, const Mat
   return den > 0 ? num / den : 0.0;
 }
 
-// Marks the vertices of faces with |ln(a_f / T_f)| beyond `band`; returns how many faces.
-int faces_outside_band(const VectorXd& target, const MatrixXd& UV, const MatrixXi& F, double band,
-                       std::vector<char>& marked) {
-  const VectorXd a = signed_face_areas_2d(UV, F);
-  int bad = 0;
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    if (target[f] > 0 && !(std::abs(std::log(std::max(a[f], 1e-300) / target[f])) <= band)) {
-      ++bad;
-      for (int c = 0; c < 3; ++c) marked[F(f, c)] = 1;
-    }
-  return bad;
-}
-
 Stats vertex_stats(const VectorXd& r) {
   const AbsStats s = abs_stats(r);
   return {s.mean, s.p99, s.max};
@@ -304,46 +291,14 @@ double adaptive_step(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, d
   return std::min(1.0, theta * lam);
 }
 
-// Per-vertex steps: each vertex takes theta x the smallest critical step of its triangles (capped
-// at 1); triangles that would still flip (their vertices' steps differ) halve the steps of their
-// vertices until none flips. A single bad triangle then slows only its own vertices, not the mesh
-// (the stall measured with one global step), and no triangle can flip.
-// theta <= 0: no critical-step limit, only the end state is checked (for the grid pass, whose
-// vertices travel on curved paths, so the straight-path critical steps do not apply).
+// local_step_positions (core/authalic_flow.h) on the rectangle: vertices kept on their side and inside [0, W] x [0, 1];
 // face_limit (optional): per-face signed area each triangle must stay above, instead of min_area.
-MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta,
-                              const VectorXi& side_mask, double w, double min_area, const VectorXd* face_limit = nullptr) {
-  const Eigen::Index nv = UV.rows(), nf = F.rows();
-  VectorXd crit = VectorXd::Constant(nf, kInf);
-#pragma omp parallel for schedule(static)
-  for (Eigen::Index f = 0; f < (theta > 0 ? nf : 0); ++f) {
-    Eigen::Vector2d p[3], d[3];
-    for (int c = 0; c < 3; ++c) {
-      p[c] = UV.row(F(f, c)).head<2>().transpose();
-      d[c] = D.row(F(f, c)).head<2>().transpose();
-    }
-    crit[f] = critical_step(p, d);
-  }
-  VectorXd lam = VectorXd::Ones(nv);
-  for (Eigen::Index f = 0; f < nf; ++f)
-    for (int c = 0; c < 3; ++c) lam[F(f, c)] = std::min(lam[F(f, c)], theta > 0 ? theta * crit[f] : 1.0);
-  MatrixXd out = UV;
-  auto place = [&](Eigen::Index v) {
-    double x = UV(v, 0) + lam[v] * D(v, 0), y = UV(v, 1) + lam[v] * D(v, 1);
-    constrain_to_rectangle(x, y, side_mask.size() ? side_mask[v] : 0, w);
-    out(v, 0) = x;
-    out(v, 1) = y;
-  };
-  for (Eigen::Index v = 0; v < nv; ++v) place(v);
-  VectorXd a;
-  halve_steps_until_unfolded(
-      F, lam,
-      [&](Eigen::Index f) {
-        if (f == 0) a = signed_face_areas_2d(out, F);  // once per round
-        return !(a[f] > (face_limit ? (*face_limit)[f] : min_area));
-      },
-      place);
-  return out;
+MatrixXd rectangle_step_positions(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta,
+                                  const VectorXi& side_mask, double w, double min_area, const VectorXd* face_limit = nullptr) {
+  return local_step_positions(UV, F, D, theta, face_limit ? *face_limit : VectorXd::Constant(F.rows(), min_area),
+                              [&](Eigen::Index v, double& x, double& y) {
+                                constrain_to_rectangle(x, y, side_mask.size() ? side_mask[v] : 0, w);
+                              });
 }
 
 void apply_displacement(MatrixXd& UV, const MatrixXd& D, double lambda, const VectorXi& side_mask, double w) {
@@ -376,6 +331,53 @@ MatrixXd lie_displacement(const MatrixXd& UV, const MatrixXi& F_dom, const Vecto
 }
 
 }  // namespace
+
+MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta,
+                              const VectorXd& face_limit, const std::function<void(Eigen::Index, double&, double&)>& constrain) {
+  const Eigen::Index nv = UV.rows(), nf = F.rows();
+  VectorXd crit = VectorXd::Constant(nf, kInf);
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index f = 0; f < (theta > 0 ? nf : 0); ++f) {
+    Eigen::Vector2d p[3], d[3];
+    for (int c = 0; c < 3; ++c) {
+      p[c] = UV.row(F(f, c)).head<2>().transpose();
+      d[c] = D.row(F(f, c)).head<2>().transpose();
+    }
+    crit[f] = critical_step(p, d);
+  }
+  VectorXd lam = VectorXd::Ones(nv);
+  for (Eigen::Index f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) lam[F(f, c)] = std::min(lam[F(f, c)], theta > 0 ? theta * crit[f] : 1.0);
+  MatrixXd out = UV;
+  auto place = [&](Eigen::Index v) {
+    double x = UV(v, 0) + lam[v] * D(v, 0), y = UV(v, 1) + lam[v] * D(v, 1);
+    if (constrain) constrain(v, x, y);
+    out(v, 0) = x;
+    out(v, 1) = y;
+  };
+  for (Eigen::Index v = 0; v < nv; ++v) place(v);
+  VectorXd a;
+  halve_steps_until_unfolded(
+      F, lam,
+      [&](Eigen::Index f) {
+        if (f == 0) a = signed_face_areas_2d(out, F);  // once per round
+        return !(a[f] > face_limit[f]);
+      },
+      place);
+  return out;
+}
+
+int faces_outside_band(const VectorXd& target, const MatrixXd& UV, const MatrixXi& F, double band,
+                       std::vector<char>& marked) {
+  const VectorXd a = signed_face_areas_2d(UV, F);
+  int bad = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    if (target[f] > 0 && !(std::abs(std::log(std::max(a[f], 1e-300) / target[f])) <= band)) {
+      ++bad;
+      for (int c = 0; c < 3; ++c) marked[F(f, c)] = 1;
+    }
+  return bad;
+}
 
 MatrixXd face_area_newton_displacement(const MatrixXd& UV, const MatrixXi& F, const VectorXd& face_target,
                                        const VectorXi& side_mask, const std::vector<char>& free_vertex,
@@ -697,7 +699,7 @@ MatrixXd flip_free_positions(Flow& s, const MatrixXd& moved) {
   // neighbours; fs741 pial (benchmark R1), first pass: per-vertex mean 0.27 held back, 0.033
   // untangled); untangling smooths a patch (the fsaverage5 whole-brain rectangle: element CV
   // 0.011 untangled, below 0.01 held back).
-  const MatrixXd held = local_step_positions(s.UV, s.F, moved - s.UV, 0.0, s.side_mask, s.w, s.min_area);
+  const MatrixXd held = rectangle_step_positions(s.UV, s.F, moved - s.UV, 0.0, s.side_mask, s.w, s.min_area);
   MatrixXd untangled = s.constrained(moved);
   int left = 0;
   const int moved_by_untangle =
@@ -901,7 +903,7 @@ class Polish {
         if (a0[f] > floor[f]) limit[f] = std::max(s_.min_area, floor[f]);
     }
     for (double scale = 1.0; scale > 0.1; scale *= 0.5) {
-      MatrixXd next = local_step_positions(s_.UV, s_.F, scale * D, s_.opt.theta, s_.side_mask, s_.w, s_.min_area, &limit);
+      MatrixXd next = rectangle_step_positions(s_.UV, s_.F, scale * D, s_.opt.theta, s_.side_mask, s_.w, s_.min_area, &limit);
       double fm = 0;
       Stats st;
       if (!accept(next, fm, st)) continue;

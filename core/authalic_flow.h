@@ -30,6 +30,7 @@
 //    far off, e.g. at a corner where the Neumann field vanishes, never move the global error).
 // Measure control (DLF section 5.5): an optional per-vertex density multiplies the surface area
 // element, so a region of density 2 receives twice its natural share of the domain.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -168,6 +169,24 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
 MatrixXd face_area_newton_displacement(const MatrixXd& UV, const MatrixXi& F, const VectorXd& face_target,
                                        const VectorXi& side_mask, const std::vector<char>& free_vertex,
                                        int cg_iterations = 50);
+
+// Per-vertex flip-preventing steps (the polishes' and the flow's): each vertex takes theta x the
+// smallest critical step of its triangles (capped at 1); triangles that would still fall to or
+// below face_limit (#F signed areas; their vertices' steps differ) halve the steps of their
+// vertices until none does. A single bad triangle then slows only its own vertices, not the mesh
+// (the stall measured with one global step), and no triangle can flip. theta <= 0: no
+// critical-step limit, only the end state is checked (for the grid pass, whose vertices travel on
+// curved paths, so the straight-path critical steps do not apply). constrain(v, x, y), if given,
+// brings vertex v's new position onto its domain (a rectangle's side; the disk's polish holds its
+// circle, so it passes none). Returns UV + λ_v D_v per vertex.
+MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta,
+                              const VectorXd& face_limit,
+                              const std::function<void(Eigen::Index, double&, double&)>& constrain = {});
+
+// Marks (marked: #V, set to 1) the vertices of the faces whose |ln(a_f / T_f)| is beyond `band`
+// (a folded face always is); returns how many faces.
+int faces_outside_band(const VectorXd& target, const MatrixXd& UV, const MatrixXi& F, double band,
+                       std::vector<char>& marked);
 
 // Largest λ > 0 such that moving the triangle's vertices p_i + s d_i keeps it positively oriented
 // for all s in [0, λ) (DLF section 5.4: the smallest positive root of the quadratic signed area);

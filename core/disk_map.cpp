@@ -10,6 +10,7 @@
 #include "core/concentric_map.h"
 #include "core/conformal_map.h"
 #include "core/error.h"
+#include "core/metrics.h"
 #include "core/sparse_cholesky.h"
 
 namespace authalic {
@@ -32,42 +33,7 @@ double face_error(const VectorXd& target, const MatrixXd& D, const MatrixXi& F) 
 }
 
 double vertex_error(const VectorXd& target, const MatrixXd& D, const MatrixXi& F) {
-  const VectorXd r = vertex_log_ratio(target, D, F, static_cast<int>(D.rows()));
-  double sum = 0;
-  int n = 0;
-  for (Eigen::Index v = 0; v < r.size(); ++v)
-    if (std::isfinite(r[v])) sum += std::abs(r[v]), ++n;
-  return n ? sum / n : 0.0;
-}
-
-// Positions after `scale` x step with per-vertex steps: theta x each vertex's critical step,
-// halved where a face would fall below its limit.
-MatrixXd stepped_positions(const MatrixXd& D, const MatrixXi& F, const MatrixXd& step, double scale, double theta,
-                           const VectorXd& limit) {
-  const Eigen::Index nv = D.rows(), nf = F.rows();
-  auto displacement = [&](Eigen::Index v) -> Eigen::Vector2d { return scale * step.row(v).transpose(); };
-  VectorXd lam = VectorXd::Ones(nv);
-  for (Eigen::Index f = 0; f < nf; ++f) {
-    Eigen::Vector2d p[3], d[3];
-    for (int c = 0; c < 3; ++c) {
-      p[c] = D.row(F(f, c)).transpose();
-      d[c] = displacement(F(f, c));
-    }
-    const double crit = critical_step(p, d);
-    for (int c = 0; c < 3; ++c) lam[F(f, c)] = std::min(lam[F(f, c)], theta * crit);
-  }
-  MatrixXd out = D;
-  auto place = [&](Eigen::Index v) { out.row(v) = D.row(v) + lam[v] * scale * step.row(v); };
-  for (Eigen::Index v = 0; v < nv; ++v) place(v);
-  halve_steps_until_unfolded(
-      F, lam,
-      [&](Eigen::Index f) {
-        const Eigen::Vector2d a = out.row(F(f, 0)).transpose(), b = out.row(F(f, 1)).transpose(), c = out.row(F(f, 2)).transpose();
-        const double area = 0.5 * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
-        return !(area > limit[f]);
-      },
-      place);
-  return out;
+  return abs_stats(vertex_log_ratio(target, D, F, static_cast<int>(D.rows()))).mean;
 }
 
 // Unfolds the triangles at or below min_area by moving interior vertices to their neighbours'
@@ -118,10 +84,9 @@ int split_long_chords(SquareMapResult& r, MatrixXd& D, VectorXi& on_circle, doub
   on_circle.conservativeResize(nv0 + inserted);
   r.initial.inserted_parents.conservativeResize(np0 + inserted, 2);
   r.initial.inserted_weight.conservativeResize(np0 + inserted);
-  int added_faces = 0;
-  for (const Split& s : splits) added_faces += s.pieces - 1;
-  r.F.conservativeResize(nf + added_faces, 3);
-  r.face_origin.conservativeResize(nf + added_faces);
+  // Each split edge's face becomes a fan of `pieces` faces: one new face per inserted vertex.
+  r.F.conservativeResize(nf + inserted, 3);
+  r.face_origin.conservativeResize(nf + inserted);
   Eigen::Index v = nv0, g = nf, p = np0;
   for (const Split& s : splits) {
     const int i = r.F(s.face, s.corner), j = r.F(s.face, (s.corner + 1) % 3), k = r.F(s.face, (s.corner + 2) % 3);
@@ -169,25 +134,19 @@ int polish_disk_face_areas(MatrixXd& D, const MatrixXi& F, const VectorXd& targe
   for (int k = 0; k < opt.polish_iterations; ++k) {
     // The faces outside the band and `rings` rings around them move.
     std::vector<char> free_vertex(static_cast<std::size_t>(nv), 0);
-    const VectorXd a = signed_face_areas_2d(D, F);
-    int bad = 0;
-    for (Eigen::Index f = 0; f < F.rows(); ++f)
-      if (target[f] > 0 && !(a[f] > 0 && std::abs(std::log(a[f] / target[f])) <= opt.band)) {
-        ++bad;
-        for (int c = 0; c < 3; ++c) free_vertex[F(f, c)] = 1;
-      }
+    const int bad = faces_outside_band(target, D, F, opt.band, free_vertex);
     if (bad == 0) break;
     grow_by_rings(free_vertex, adj, opt.rings);
     const MatrixXd step = face_area_newton_displacement(D, F, target, held, free_vertex, opt.cg_iterations);
     // No step thins a triangle above twice its float32 floor below it (the map is stored as float32).
-    const VectorXd floor = 2.0 * single_precision_area_floor(D, F);
+    const VectorXd a = signed_face_areas_2d(D, F), floor = 2.0 * single_precision_area_floor(D, F);
     VectorXd limit = VectorXd::Constant(F.rows(), min_area);
     for (Eigen::Index f = 0; f < F.rows(); ++f)
       if (a[f] > floor[f]) limit[f] = std::max(min_area, floor[f]);
     bool better = false;
     const double before = cur;
     for (double scale = 1.0; scale > 0.1 && !better; scale *= 0.5) {
-      MatrixXd next = stepped_positions(D, F, step, scale, opt.theta, limit);
+      MatrixXd next = local_step_positions(D, F, scale * step, opt.theta, limit);  // the circle is held: no constraint
       const double e = face_error(target, next, F);
       if (!(e < cur)) continue;
       const double ev = vertex_error(target, next, F);

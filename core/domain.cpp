@@ -2,6 +2,7 @@
 #include "core/domain.h"
 
 #include <algorithm>
+#include <sstream>
 
 #include "core/concentric_map.h"
 #include "core/error.h"
@@ -93,6 +94,25 @@ std::vector<OverlapPiece> Domain::element_overlap(const MatrixXd& D, const Matri
   g.width = width();
   g.height = 1.0;
   return grid_overlap(D, F, g);
+}
+
+double disk_map_radius(const MatrixXd& D, const MatrixXi& F, std::string* problem) {
+  double rmax = 0;
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(INFINITY), hi = -lo;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector2d p = D.row(F(f, c)).head<2>().transpose();
+      rmax = std::max(rmax, p.norm()), lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    }
+  const Eigen::Vector2d centre = (lo + hi) / 2;
+  problem->clear();
+  if (!(rmax > 0) || !(centre.norm() <= 0.05 * rmax)) {
+    std::ostringstream s;
+    s << "not a disk map centred at the origin (bounding-box centre (" << centre.x() << ", " << centre.y()
+      << ") for radius " << rmax << ")";
+    *problem = s.str();
+  }
+  return rmax;
 }
 
 bool Domain::same_part(int k, int col1, int col2) const {

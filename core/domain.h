@@ -116,4 +116,10 @@ struct Domain {
 
 inline std::string to_string(const Domain& domain) { return to_string(domain.kind); }
 
+// A disk map's radius: the distance from the origin of the farthest vertex of F in D (#V x >= 2).
+// *problem is set to why D is not a disk map centred at the origin ("not a disk map centred at the
+// origin (bounding-box centre (x, y) for radius r)": the centre more than 5 % of r away, or no
+// extent), or cleared when it is one. Maps written in mm are disk maps of another radius.
+double disk_map_radius(const MatrixXd& D, const MatrixXi& F, std::string* problem);
+
 }  // namespace authalic
