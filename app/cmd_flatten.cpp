@@ -456,6 +456,7 @@ void run(const FlattenArgs& a) {
                  {"face_ln_area_abs_mean_carried", disk.carried_face_error},
                  {"face_ln_area_abs_mean_polished", disk.face_error},
                  {"polish_iterations", disk.polish_iterations},
+                 {"cell_pass", {{"element_cv_before", disk.cell_cv_before_pass}, {"kept", disk.cell_pass_kept}}},
                  {"elements", "the K x K cells of the square carried onto the disk by the concentric map (equal area)"}};
   if (!a.metrics.empty()) {
     j["initial_metrics"] = metrics_json(map_metrics(r.V, r.UV_initial, r.F, domain, a.k));

@@ -12,13 +12,15 @@
 // |ln area ratio| 0.018 -> 0.032, 6 folded; fs741: 109 folded). What the carry leaves is at the
 // scale of single faces, which the per-face polish removes: Gauss-Newton steps on the face areas
 // (as the square's polish, core/authalic_flow.h), first about the far-off faces alone, then about
-// all faces beyond a band. The boundary vertices slid along the circle in the square's flow (its
-// sides are the circle's quarters) and are held by the polish: sliding them opened chords of 0.37
-// rad on fs741 (the circle's segment under a chord is lost to the cells along it). Long chords
-// are split first. Cell-scale area, which the elements see, is kept by the carry up to the mesh's
+// all faces beyond a band; last, one Moser pass on the cells (in the square the concentric map
+// carries onto the disk), kept only when it lowers the 32 x 32 element CV. The boundary vertices
+// slid along the circle in the square's flow (its sides are the circle's quarters) and are held by
+// the polish: sliding them opened chords of 0.37 rad on fs741 (the circle's segment under a chord
+// is lost to the cells along it). Long chords are split first. Cell-scale area, which the elements see, is kept by the carry up to the mesh's
 // interpolation; the disk's elements are the square's cells carried the same way (core/domain.h).
-// Measured (flatten --domain disk): B1 element CV 0.0050, per-face mean 0.0073; fs741 lh white
-// CV 0.0035, per-face 0.0088 (the square maps: 0.0023 / 0.018 and 0.0003 / 0.0094).
+// Measured (flatten --domain disk, bench/bench_disk.sh): B1 element CV 0.0039, per-face mean
+// 0.0079; fs741 lh white CV 0.0035, per-face 0.0088 (the square maps: 0.0023 / 0.018 and 0.0003
+// / 0.0094).
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "core/square_map.h"
@@ -44,6 +46,8 @@ struct DiskMapReport {
   double carried_face_error = 0; // per-face mean |ln area ratio| right after the carry (and untangling)
   double face_error = 0;         // after the polish
   int polish_iterations = 0;
+  double cell_cv_before_pass = 0; // 32 x 32 element CV before the final Moser pass on the cells
+  bool cell_pass_kept = false;    // the pass lowered it (else the polished map is kept)
   int flips = 0;                 // flipped triangles of the result (0 unless something failed)
 };
 

@@ -83,16 +83,20 @@ TEST(DiskMap, CarriesTheSquareMapAndEndsAuthalicOnACurvedPatch) {
   const SquareMapResult disk = disk_map(m.V, m.F, so, {}, &rep);
   EXPECT_EQ(disk.flips, 0);
   EXPECT_EQ(rep.flips, 0);
-  // The boundary is the square map's, carried (held by the polish): by arc length on the circle,
-  // the square's top middle at the top of the disk.
+  // The boundary is the square map's, carried: by arc length on the circle, the square's top
+  // middle at the top of the disk. The polish holds it; only the final cell pass, when kept, slides
+  // it along the circle, by a small fraction of an element (here a 1/8 cell spans 0.785 rad).
   int on_circle = 0;
+  double slide = 0;
   for (Eigen::Index v = 0; v < square.UV.rows(); ++v) {
     if (square.side_mask[v] == 0) continue;
     ++on_circle;
     const Eigen::Vector2d want = concentric_square_to_disk(2 * square.UV(v, 0) - 1, 2 * square.UV(v, 1) - 1).normalized();
-    EXPECT_LT((disk.UV.row(v).transpose() - want).norm(), 1e-12) << v;
+    EXPECT_NEAR(disk.UV.row(v).norm(), 1.0, 1e-12) << v;
+    slide = std::max(slide, (disk.UV.row(v).transpose() - want).norm());
   }
   EXPECT_GT(on_circle, 100);
+  EXPECT_LT(slide, rep.cell_pass_kept ? 0.01 : 1e-12) << "cell pass kept: " << rep.cell_pass_kept;
   // Authalic on the disk: the element areas and the per-face areas.
   const MapMetrics mm = map_metrics(disk.V, disk.UV, disk.F, Domain::disk(), 8);
   EXPECT_EQ(mm.flips, 0);
