@@ -476,8 +476,8 @@ int delaunay_flip(const MatrixXd& UV, MatrixXi& F, int max_flips) {
   return flips;
 }
 
-int untangle_flips(const MatrixXi& F, const VectorXi& side_mask, double width, const VectorXd& min_area, MatrixXd& UV,
-                   int* remaining, int max_rounds) {
+int untangle_flips(const MatrixXi& F, const VectorXd& min_area, MatrixXd& UV, const std::function<bool(Eigen::Index)>& held,
+                   const std::function<void(Eigen::Index, double&, double&)>& constrain, int* remaining, int max_rounds) {
   const Eigen::Index nv = UV.rows();
   const std::vector<std::vector<int>> adj = vertex_neighbours(F, nv);
   std::vector<char> moved(static_cast<std::size_t>(nv), 0);
@@ -495,14 +495,12 @@ int untangle_flips(const MatrixXi& F, const VectorXi& side_mask, double width, c
     grow_by_rings(mark, adj, round / 10);
     for (int sweep = 0; sweep < 5; ++sweep)
       for (Eigen::Index v = 0; v < nv; ++v) {
-        const int m = side_mask.size() ? side_mask[v] : 0;
-        if (!mark[v] || adj[v].empty() || __builtin_popcount(static_cast<unsigned>(m)) >= 2) continue;
+        if (!mark[v] || adj[v].empty() || (held && held(v))) continue;
         Eigen::Vector2d mean = Eigen::Vector2d::Zero();
         for (int u : adj[v]) mean += UV.row(u).head<2>().transpose();
         mean /= static_cast<double>(adj[v].size());
-        double x = (m & (kSideLeft | kSideRight)) ? UV(v, 0) : mean.x();
-        double y = (m & (kSideBottom | kSideTop)) ? UV(v, 1) : mean.y();
-        constrain_to_rectangle(x, y, m, width);
+        double x = mean.x(), y = mean.y();
+        if (constrain) constrain(v, x, y);
         UV(v, 0) = x;
         UV(v, 1) = y;
         moved[v] = 1;
@@ -510,6 +508,16 @@ int untangle_flips(const MatrixXi& F, const VectorXi& side_mask, double width, c
   }
   if (remaining) *remaining = left;
   return static_cast<int>(std::count(moved.begin(), moved.end(), 1));
+}
+
+int untangle_flips(const MatrixXi& F, const VectorXi& side_mask, double width, const VectorXd& min_area, MatrixXd& UV,
+                   int* remaining, int max_rounds) {
+  // Corners stay; a side vertex moves along its side (constrain_to_rectangle puts its fixed
+  // coordinate back on the side).
+  const auto mask = [&](Eigen::Index v) { return side_mask.size() ? side_mask[v] : 0; };
+  return untangle_flips(
+      F, min_area, UV, [&](Eigen::Index v) { return __builtin_popcount(static_cast<unsigned>(mask(v))) >= 2; },
+      [&](Eigen::Index v, double& x, double& y) { constrain_to_rectangle(x, y, mask(v), width); }, remaining, max_rounds);
 }
 
 VectorXd single_precision_area_floor(const MatrixXd& UV, const MatrixXi& F) {

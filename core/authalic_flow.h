@@ -208,6 +208,12 @@ int repair_flips(const MatrixXd& V, const MatrixXi& F, const VectorXi& side_mask
 // stays inside a nearly convex one-ring. Returns the vertices moved; *remaining = triangles left.
 int untangle_flips(const MatrixXi& F, const VectorXi& side_mask, double width, const VectorXd& min_area, MatrixXd& UV,
                    int* remaining = nullptr, int max_rounds = 40);
+// The same on any domain: held(v) true keeps vertex v where it is; constrain(v, x, y), if given,
+// brings a moved vertex back onto the domain (the disk's untangling holds its circle, and passes
+// none).
+int untangle_flips(const MatrixXi& F, const VectorXd& min_area, MatrixXd& UV, const std::function<bool(Eigen::Index)>& held,
+                   const std::function<void(Eigen::Index, double&, double&)>& constrain = {}, int* remaining = nullptr,
+                   int max_rounds = 40);
 
 // Per face, the signed area (in the map's units) below which its orientation may not survive
 // storing the map in single precision (GIFTI coordinates are float32). Rounding moves each

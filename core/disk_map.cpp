@@ -38,16 +38,10 @@ double vertex_error(const VectorXd& target, const MatrixXd& D, const MatrixXi& F
 }
 
 // Unfolds the triangles at or below min_area by moving interior vertices to their neighbours'
-// mean (untangle_flips, on the disk's bounding square [−1, 1]^2 shrunk to [0, 1]^2, where that
-// clamp is harmless; circle vertices held as corners). Returns the vertices moved.
+// mean (untangle_flips), the circle's vertices held. Returns the vertices moved.
 int untangle_disk(MatrixXd& D, const MatrixXi& F, const VectorXi& on_circle, double min_area, int* remaining) {
-  MatrixXd U = (D.array() + 1.0) / 2.0;
-  VectorXi held = VectorXi::Zero(on_circle.size());
-  for (Eigen::Index v = 0; v < held.size(); ++v)
-    if (on_circle[v]) held[v] = kSideLeft | kSideBottom;
-  const int moved = untangle_flips(F, held, 1.0, VectorXd::Constant(F.rows(), min_area / 4.0), U, remaining);
-  D = 2.0 * U.array() - 1.0;
-  return moved;
+  return untangle_flips(F, VectorXd::Constant(F.rows(), min_area), D, [&](Eigen::Index v) { return on_circle[v] != 0; }, {},
+                        remaining);
 }
 
 
