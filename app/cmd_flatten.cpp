@@ -37,6 +37,7 @@ struct FlattenArgs {
   // Atlas correspondence (issue 14): the subject's sphere.reg and the atlas.
   std::string sphere_reg, atlas_dir, atlas_surface, atlas_sphere, atlas_label, atlas_faces_from;
   std::string method = "grid";
+  std::string mesh_targets = "surface";
   std::string domain = "square";  // or "disk" (the square map carried onto the disk, core/disk_map.h)
   int k = 32;
   int grid = 0;  // 0: from the region's size (grid_resolution_for)
@@ -250,6 +251,7 @@ SquareMapOptions square_map_options(const FlattenArgs& a, const TriMesh& mesh) {
   options.flow.grid.max_passes = a.passes;
   options.flow.mesh.fixed_steps = a.fixed_steps;
   options.flow.mesh.max_iterations = a.iterations;
+  options.flow.mesh.targets = a.mesh_targets == "flowing" ? MeshFlowTargets::Flowing : MeshFlowTargets::Surface;
   options.flow.polish.enabled = !a.no_polish;
   options.flip_dividing_edges = !a.split_dividing_edges;
   options.stretch_start = a.start == "stretch";
@@ -544,7 +546,7 @@ void setup(CLI::App& parent) {
                   "K x K elements are the square's cells carried the same way; docs/maps.md)")
       ->check(CLI::IsMember({"square", "disk"}))
       ->capture_default_str();
-  sub->add_option("--method", a->method, "Flow: grid (Moser flow on a DCT grid, default) or mesh (discrete Lie flow, DLF)")
+  sub->add_option("--method", a->method, "Flow: grid (Moser flow on a DCT grid, default) or mesh (discrete Lie flow, DLF Algorithm 1); the per-face polish follows either")
       ->check(CLI::IsMember({"grid", "mesh"}))
       ->capture_default_str();
   sub->add_option("--grid", a->grid,
@@ -553,10 +555,16 @@ void setup(CLI::App& parent) {
       ->check(CLI::IsMember({0}) | in_range(16, 4096));
   sub->add_option("--passes", a->passes, "Maximum flow passes (grid method)")->check(in_range(0, 100))->capture_default_str();
   sub->add_option("--iterations", a->iterations, "Maximum steps (mesh method)")->check(in_range(0, 100000))->capture_default_str();
+  sub->add_option("--mesh-targets", a->mesh_targets,
+                  "Mesh method: target vertex areas from the surface's own triangles (surface, what the outputs are "
+                  "measured on) or from the surface re-triangulated by the flowing mesh's edge flips (flowing, the DLF "
+                  "paper's reading; docs/maps.md)")
+      ->check(CLI::IsMember({"surface", "flowing"}))
+      ->capture_default_str();
   sub->add_option("--fixed-steps", a->fixed_steps,
                   "Mesh method with Zou's fixed schedule of K steps (eq. 19) instead of adaptive steps")
       ->check(in_range(0, 100000));
-  sub->add_flag("--no-polish", a->no_polish, "Skip the final per-face Gauss-Newton polish (grid method)");
+  sub->add_flag("--no-polish", a->no_polish, "Skip the final per-face Gauss-Newton polish (both methods)");
   sub->add_flag("--split-dividing-edges", a->split_dividing_edges,
                 "Split every interior edge whose ends land on one side of the square at its midpoint (Zou et al. 2011, "
                 "section 4.1) instead of flipping it; the maps then have appended vertices, recorded as "

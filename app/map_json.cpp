@@ -103,6 +103,7 @@ nlohmann::json flow_json(const FlowReport& r, const FlowOptions& o) {
           {"polish_iterations", r.polish_iterations},
           {"converged", r.converged},
           {"stop_reason", r.stop_reason},
+          {"stall_detail", r.stall_detail},
           {"tolerance", {{"vertex_ln_area_abs_mean", o.tolerance_mean}, {"vertex_ln_area_abs_p99", o.tolerance_p99}}},
           {"grid_resolution", r.grid_resolution},
           {"rk4_steps", o.grid.rk4_steps},
@@ -112,6 +113,7 @@ nlohmann::json flow_json(const FlowReport& r, const FlowOptions& o) {
           {"flips", r.flips},
           {"vertex_ln_area_abs_mean_history", r.history_mean},
           {"initial_vertex_ln_area_abs", {{"mean", r.initial_vertex_mean}, {"p99", r.initial_vertex_p99}}},
+          {"flow_vertex_ln_area_abs_mean", r.flow_vertex_mean},
           {"final_vertex_ln_area_abs", {{"mean", r.final_vertex_mean}, {"p99", r.final_vertex_p99}, {"max", r.final_vertex_max}}}};
 }
 

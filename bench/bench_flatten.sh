@@ -3,7 +3,8 @@
 #   bench/bench_flatten.sh [BUILD_DIR]     (default: build; needs ../shared/data)
 # Inputs: B1 = white_left with the cortex face set of flat_left (9,465 region vertices),
 #         B2 = the same on pial_left, B3 = B1 subdivided twice (midpoint; B1's vertices first).
-# Beside them: the DLF mesh flow (adaptive flip-preventing step) on B1, the conformal initial maps,
+# Beside them: the DLF mesh flow (adaptive flip-preventing step) on B1, with and without the polish
+# and from either start (issue 18 part 3), the conformal initial maps,
 # and FreeSurfer's own flat map. Every map is also measured by ../shared/tools/evalmap.py
 # (independent, nibabel; exact element areas). The maps have the input's vertices (dividing edges
 # are flipped, not split), so both measure the same faces.
@@ -35,8 +36,13 @@ rss() { awk -F': ' '/Maximum resident set size/{printf "%.0f", $2/1024}' "$work/
 run B1 "$data/white_left.gii.gz" --faces-from "$data/flat_left.gii.gz"
 run B2 "$data/pial_left.gii.gz" --faces-from "$data/flat_left.gii.gz"
 run B3 "$work/b3.surf.gii"
-# The DLF mesh flow does not reach the acceptance (exit 3): --keep-failed writes it for its row.
+# The DLF mesh flow (issue 18 part 3): with the per-face polish (the default), alone (--no-polish:
+# it fails the acceptance, exit 3, so --keep-failed writes it for its row), alone from the
+# conformal map, and alone with the paper's targets (the surface re-triangulated by the flips).
 run B1-mesh "$data/white_left.gii.gz" --faces-from "$data/flat_left.gii.gz" --method mesh --keep-failed
+run B1-dlf "$data/white_left.gii.gz" --faces-from "$data/flat_left.gii.gz" --method mesh --no-polish --keep-failed
+run B1-dlf-conformal "$data/white_left.gii.gz" --faces-from "$data/flat_left.gii.gz" --method mesh --no-polish --keep-failed --start conformal
+run B1-dlf-flowing "$data/white_left.gii.gz" --faces-from "$data/flat_left.gii.gz" --method mesh --no-polish --keep-failed --start conformal --mesh-targets flowing
 # Determinism: 1 and 2 threads give byte-identical maps.
 "$bin" flatten "$data/white_left.gii.gz" "$work/t1.surf.gii" --faces-from "$data/flat_left.gii.gz" --threads 1 -q
 "$bin" flatten "$data/white_left.gii.gz" "$work/t2.surf.gii" --faces-from "$data/flat_left.gii.gz" --threads 2 -q
@@ -61,15 +67,18 @@ if [ -f /usr/include/CGAL/Surface_mesh_parameterization/Discrete_authalic_parame
   done
 fi
 
-for n in B1 B2 B3 B1-mesh; do
+for n in B1 B2 B3 B1-mesh B1-dlf B1-dlf-conformal B1-dlf-flowing; do
   surf="$data/white_left.gii.gz"; [ $n = B2 ] && surf="$data/pial_left.gii.gz"; [ $n = B3 ] && surf="$work/b3.surf.gii"
   $py "$evalmap" "$surf" "$work/$n.uv.surf.gii" --domain square --k 32 --json > "$work/$n.eval.json"
 done
 $py "$evalmap" "$data/white_left.gii.gz" "$work/B1.init.surf.gii" --domain square --k 32 --json > "$work/B1-conformal.eval.json"
 
-WALL_B1=$(wall B1) WALL_B2=$(wall B2) WALL_B3=$(wall B3) WALL_MESH=$(wall B1-mesh) \
-RSS_B1=$(rss B1) RSS_B2=$(rss B2) RSS_B3=$(rss B3) RSS_MESH=$(rss B1-mesh) SAME=$same WORK=$work CGAL=$cgal \
-CPU_B1=$(cpu B1) CPU_B2=$(cpu B2) CPU_B3=$(cpu B3) CPU_MESH=$(cpu B1-mesh) \
+WALL_B1=$(wall B1) WALL_B2=$(wall B2) WALL_B3=$(wall B3) WALL_MESH=$(wall B1-mesh) WALL_DLF=$(wall B1-dlf) \
+WALL_DLFC=$(wall B1-dlf-conformal) WALL_DLFF=$(wall B1-dlf-flowing) \
+RSS_B1=$(rss B1) RSS_B2=$(rss B2) RSS_B3=$(rss B3) RSS_MESH=$(rss B1-mesh) RSS_DLF=$(rss B1-dlf) \
+RSS_DLFC=$(rss B1-dlf-conformal) RSS_DLFF=$(rss B1-dlf-flowing) SAME=$same WORK=$work CGAL=$cgal \
+CPU_B1=$(cpu B1) CPU_B2=$(cpu B2) CPU_B3=$(cpu B3) CPU_MESH=$(cpu B1-mesh) CPU_DLF=$(cpu B1-dlf) \
+CPU_DLFC=$(cpu B1-dlf-conformal) CPU_DLFF=$(cpu B1-dlf-flowing) \
 PYTHONPATH=bench $py - <<'EOF'
 import json, os, numpy as np, nibabel as nib
 from requirements import Requirements
@@ -84,10 +93,13 @@ def row(name, m, wall, rss, iters, ev):
                  v.get('max', float('nan')), m['element_cv'], m['lambda']['mean'],
                  ev.get('element_area_cv', float('nan')) if ev else float('nan'), ev['ln_area_ratio_abs_mean'] if ev else float('nan')))
 res = {}
-for n, key in [('B1', 'B1'), ('B2', 'B2'), ('B3', 'B3'), ('B1-mesh', 'MESH')]:
+names = {'B1-mesh': 'B1 DLF mesh flow + polish', 'B1-dlf': 'B1 DLF mesh flow alone',
+         'B1-dlf-conformal': 'B1 DLF alone, conformal start', 'B1-dlf-flowing': 'B1 DLF alone, conformal, flowing targets'}
+for n, key in [('B1', 'B1'), ('B2', 'B2'), ('B3', 'B3'), ('B1-mesh', 'MESH'), ('B1-dlf', 'DLF'), ('B1-dlf-conformal', 'DLFC'),
+               ('B1-dlf-flowing', 'DLFF')]:
     j = J(f'{n}.json'); fl = j['flow']
     res[n] = j
-    row(f'{n} authalic' if n != 'B1-mesh' else 'B1 DLF mesh flow', j['metrics'], os.environ['WALL_' + key] + ' (cpu ' + os.environ['CPU_' + key] + ')', os.environ['RSS_' + key],
+    row(names.get(n, f'{n} authalic'), j['metrics'], os.environ['WALL_' + key] + ' (cpu ' + os.environ['CPU_' + key] + ')', os.environ['RSS_' + key],
         f"{fl['iterations']}+{fl['polish_iterations']}", J(f'{n}.eval.json'))
 for n in ['B1', 'B2', 'B3']:
     row(f'{n} conformal (initial)', J(f'{n}.json')['initial_metrics'], '-', '-', '-', J('B1-conformal.eval.json') if n == 'B1' else None)
@@ -131,4 +143,15 @@ req('B3 wall s', float(os.environ['WALL_B3']), 10.0)
 req('B3 peak MB', float(os.environ['RSS_B3']), 1536)
 req('resolution independence', d.mean(), 0.01)
 print(f'  {"PASS" if os.environ["SAME"] == "identical" else "FAIL"}  1 vs 2 threads: {os.environ["SAME"]}')
+print()
+for n in ['B1-dlf', 'B1-dlf-conformal', 'B1-dlf-flowing']:
+    fl = res[n]['flow']
+    print(f'{names[n]}: {fl["iterations"]} steps, stopped: {fl["stop_reason"]} ({fl["stall_detail"]})')
+req = Requirements('issue 18 part 3 (the DLF mesh flow alone on B1, from the default start)')
+m, fl = res['B1-dlf']['metrics'], res['B1-dlf']['flow']
+req('B1 DLF flips', m['flips'], 0)
+req('B1 DLF element CV', m['element_cv'], 0.02)
+req('B1 DLF evalmap element CV', J('B1-dlf.eval.json')['element_area_cv'], 0.02)
+req('B1 DLF steps', fl['iterations'], 200)
+req('B1 DLF + polish per-vertex mean (acceptance)', res['B1-mesh']['metrics']['vertex_ln_area_abs']['mean'], 0.01)
 EOF

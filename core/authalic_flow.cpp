@@ -773,14 +773,62 @@ void grid_passes(Flow& s) {
   if (s.met(s.cur)) s.rep.stop_reason = "tolerance";
 }
 
-// Mesh method: DLF Algorithm 1 on a flowing copy of the connectivity (Delaunay flips), or Zou's
-// fixed-K schedule (eq. 19) when fixed_steps > 0.
+// The triangle of F_dom that limits the adaptive step (DLF eq. 5), described for the report:
+// which of its vertices lie on which side. A stalled flow names it (measured on fsaverage5: an
+// interior vertex closing in on an unflippable boundary edge, or two sliding boundary vertices
+// closing in on each other).
+std::string limiting_triangle(const MatrixXd& UV, const MatrixXi& F_dom, const MatrixXd& D, const VectorXi& side_mask) {
+  Eigen::Index worst = -1;
+  double lam = kInf;
+  for (Eigen::Index f = 0; f < F_dom.rows(); ++f) {
+    Eigen::Vector2d p[3], d[3];
+    for (int c = 0; c < 3; ++c) {
+      p[c] = UV.row(F_dom(f, c)).head<2>().transpose();
+      d[c] = D.row(F_dom(f, c)).head<2>().transpose();
+    }
+    const double l = critical_step(p, d);
+    if (l < lam) lam = l, worst = f;
+  }
+  if (worst < 0) return "";
+  int on_side = 0;
+  for (int c = 0; c < 3; ++c) on_side += side_mask.size() && side_mask[F_dom(worst, c)] != 0;
+  const VectorXd a = signed_face_areas_2d(UV, F_dom);
+  std::ostringstream os;
+  os << "triangle of vertices " << F_dom(worst, 0) << ", " << F_dom(worst, 1) << ", " << F_dom(worst, 2) << " (" << on_side
+     << " on the boundary), area " << a[worst] / (a.cwiseAbs().sum() / static_cast<double>(a.size())) << " of the mean";
+  return os.str();
+}
+
+// Mesh method: DLF Algorithm 1 on a flowing copy Fd of the connectivity (Delaunay flips), or
+// Zou's fixed-K schedule (eq. 19) when fixed_steps > 0. The targets h_M are the vertex shares of
+// the surface's triangles, or (MeshFlowTargets::Flowing, the paper's reading: "the surface is merely
+// interpolated by a different triangulation") of the surface re-triangulated by Fd at each step.
+// The adaptive step is the smallest critical step of all triangles (eq. 5): one triangle closing
+// in on an edge it cannot flip away (a boundary edge) halves the step at every iteration, and the
+// flow stalls (docs/maps.md: measured on fsaverage5). The adaptive flow therefore stops once
+// kMeshStallSteps steps in a row have not lowered its own error (its targets against Fd's shares)
+// by kMeshStallGain ("stalled", with the limiting triangle in stall_detail).
+constexpr int kMeshStallSteps = 5;
+constexpr double kMeshStallGain = 1e-3;
+
 void mesh_steps(Flow& s) {
   const FlowOptions& opt = s.opt;
-  const VectorXd vertex_target = vertex_share(s.target, s.F, s.nv);
+  VectorXd vertex_target = vertex_share(s.target, s.F, s.nv);
   MatrixXi Fd = s.F;
   const int fixed = opt.mesh.fixed_steps;
   const int steps = fixed > 0 ? fixed : opt.mesh.max_iterations;
+  // The flow's own error: each vertex's target against its share of the flowing mesh Fd (the
+  // output connectivity's shares, s.cur, differ where Fd has flipped edges).
+  auto flowing_error = [&](const MatrixXd& uv) {
+    const VectorXd dom = vertex_share(signed_face_areas_2d(uv, Fd).cwiseAbs(), Fd, s.nv);
+    const double st = vertex_target.sum(), sd = dom.sum();
+    VectorXd r(s.nv);
+    for (int v = 0; v < s.nv; ++v)
+      r[v] = vertex_target[v] > 0 && dom[v] > 0 ? std::log((vertex_target[v] / st) / (dom[v] / sd)) : std::numeric_limits<double>::quiet_NaN();
+    return vertex_stats(r);
+  };
+  Stats best_stats{kInf, kInf, kInf};  // measured after the first flips: Fd changes the shares
+  int since_best = 0;
   s.rep.stop_reason = "iteration limit";
   for (int k = 0; k < steps; ++k) {
     if (fixed <= 0 && s.met(s.cur)) {
@@ -788,21 +836,36 @@ void mesh_steps(Flow& s) {
       break;
     }
     if (opt.mesh.delaunay_flips) s.rep.edge_flips += delaunay_flip(s.UV, Fd);
+    if (opt.mesh.targets == MeshFlowTargets::Flowing)
+      vertex_target = vertex_share(target_face_measure(s.V, Fd, opt.density, s.w), Fd, s.nv);
     const double fraction = fixed > 0 ? 1.0 / (fixed - k) : 1.0;
     const MatrixXd D = lie_displacement(s.UV, Fd, vertex_target, fraction, s.side_mask);
     const double lambda = fixed > 0 ? std::min(1.0, adaptive_step(s.UV, Fd, D, 1.0) < 1.0 ? opt.theta * adaptive_step(s.UV, Fd, D, 1.0) : 1.0)
                                     : adaptive_step(s.UV, Fd, D, opt.theta);
     if (!(lambda > 1e-12)) {
       s.rep.stop_reason = "step vanished";
+      s.rep.stall_detail = limiting_triangle(s.UV, Fd, D, s.side_mask);
       break;
     }
+    const std::string limiting = fixed > 0 ? "" : limiting_triangle(s.UV, Fd, D, s.side_mask);
     apply_displacement(s.UV, D, lambda, s.side_mask, s.w);
     s.cur = s.stats_of(s.UV);
     ++s.rep.iterations;
     s.rep.history_mean.push_back(s.cur.mean);
     std::ostringstream msg;
-    msg << "step " << k + 1 << " (lambda " << lambda << "): per-vertex mean |ln ratio| " << s.cur.mean << ", p99 " << s.cur.p99;
+    const Stats own = flowing_error(s.UV);
+    msg << "step " << k + 1 << " (lambda " << lambda << "): per-vertex mean |ln ratio| " << own.mean << ", p99 " << own.p99
+        << " on the flowing mesh; " << s.cur.mean << " on the surface's triangles";
     report(s.progress, "flow", double(k + 1) / steps, msg.str());
+    if (fixed > 0) continue;  // Zou's schedule takes exactly its K steps
+    if (own.mean < (1.0 - kMeshStallGain) * best_stats.mean) {
+      best_stats = own;
+      since_best = 0;
+    } else if (++since_best == kMeshStallSteps) {
+      s.rep.stop_reason = "stalled";
+      s.rep.stall_detail = limiting;
+      break;
+    }
   }
   if (s.met(s.cur)) s.rep.stop_reason = "tolerance";
 }
@@ -953,7 +1016,8 @@ FlowResult authalic_flow(const MatrixXd& V, const MatrixXi& F, const MatrixXd& U
   rep.repaired += final_repairs;
   if (final_repairs > 0) s.cur = s.stats_of(s.UV);
 
-  if (opt.polish.enabled && opt.method == FlowMethod::Grid && remaining == 0) {
+  rep.flow_vertex_mean = s.cur.mean;
+  if (opt.polish.enabled && remaining == 0) {
     Polish polish(s);
     polish.global_steps();
     polish.far_face_steps();

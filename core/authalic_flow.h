@@ -23,7 +23,7 @@
 //    vertex gradients by the angle-weighted mean of face gradients (Zou et al. 2011a eq. 16), displacement
 //    λ ∇g with the adaptive flip-preventing step λ = θ min_t λ_t* (DLF eq. 5) or Zou's fixed-K
 //    schedule (Zou et al. 2011a eq. 19), boundary vertices sliding along their side, corners fixed.
-//  - Polish (after Grid, on by default): Gauss-Newton steps on the per-face areas of the output
+//  - Polish (after either method, on by default): Gauss-Newton steps on the per-face areas of the output
 //    connectivity (face_area_newton_displacement), kept only while they lower the per-face error
 //    without flipping; for the sub-cell errors a grid cannot see (native meshes). Then local
 //    steps about the faces still beyond polish.far_band, judged on their own error (a few faces
@@ -70,11 +70,20 @@ struct GridFlowOptions {
 // folded 434 triangles at 256; an atlas start moved 0.9 element instead of < 0.5): they keep 512.
 int grid_resolution_for(Eigen::Index faces, double width = 1.0);
 
+// Which triangulation the Mesh method's target areas h_M are measured on.
+//  - Surface: the vertex shares of the surface's own triangles (what every output is measured on).
+//  - Flowing: the surface re-triangulated by the flowing mesh's Delaunay flips at each step (DLF
+//    section 5.1, Zou et al. 2011a section 4.4: the surface "merely interpolated by a different
+//    triangulation"); the flow converges on its own terms, not on the surface's triangles
+//    (docs/maps.md, measured).
+enum class MeshFlowTargets { Surface, Flowing };
+
 // The Mesh method's knobs (DLF Algorithm 1 or Zou's fixed-K schedule).
 struct MeshFlowOptions {
   int max_iterations = 200;      // mesh steps
   int fixed_steps = 0;           // > 0: Zou's fixed-K schedule (eq. 19) with K = fixed_steps steps
   bool delaunay_flips = true;    // Delaunay edge flips of the flowing domain mesh
+  MeshFlowTargets targets = MeshFlowTargets::Surface;
 };
 
 // The polish after the Grid method: Gauss-Newton steps on the per-face areas.
@@ -114,7 +123,8 @@ struct FlowReport {
   int rejected_passes = 0;       // Grid: attempts rejected and retried at half their fraction
   int polish_iterations = 0;
   bool converged = false;        // met the tolerance
-  std::string stop_reason;       // "tolerance", "no improvement", "iteration limit", "step vanished"
+  std::string stop_reason;       // "tolerance", "no improvement", "iteration limit", "step vanished", "stalled" (Mesh)
+  std::string stall_detail;      // Mesh: the triangle limiting the step when it stalled or vanished
   int flips = 0;                 // flipped triangles of the returned map (output connectivity)
   int repaired = 0;              // vertices re-placed to remove flips
   int edge_flips = 0;            // Delaunay edge flips performed (Mesh method)
@@ -122,6 +132,7 @@ struct FlowReport {
   // Per-vertex |ln area ratio| (density-weighted target) before and after.
   double initial_vertex_mean = 0, initial_vertex_p99 = 0;
   double final_vertex_mean = 0, final_vertex_p99 = 0, final_vertex_max = 0;
+  double flow_vertex_mean = 0;   // after the flow's passes or steps, before the polish
   std::vector<double> history_mean;  // per iteration: per-vertex mean |ln ratio|
 };
 

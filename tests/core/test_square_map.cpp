@@ -198,3 +198,45 @@ TEST(DiscreteLieFlow, AdaptiveMeshFlowReducesDistortionWithoutFlips) {
   EXPECT_EQ(k.flow.iterations, 5);
   EXPECT_EQ(k.flips, 0);
 }
+
+TEST(DiscreteLieFlow, FlatSquareTakesNoMeshStepWithEitherTargets) {
+  // Known answer: a flat square grid is its own authalic map, whichever triangulation the targets
+  // are measured on (the flat surface re-triangulated has the same areas).
+  const TriMesh m = test::square_grid(12);
+  for (const MeshFlowTargets targets : {MeshFlowTargets::Surface, MeshFlowTargets::Flowing}) {
+    SquareMapOptions o = test_options();
+    o.anatomical_anchor = false;
+    o.flow.method = FlowMethod::Mesh;
+    o.flow.mesh.targets = targets;
+    const SquareMapResult r = square_map(m.V, m.F, o);
+    EXPECT_LT(distance_up_to_square_symmetry(r.UV, m.V), 1e-9);
+    EXPECT_EQ(r.flow.iterations, 0);
+    EXPECT_EQ(r.flow.stop_reason, "tolerance");
+  }
+}
+
+TEST(DiscreteLieFlow, BothTargetsLowerTheErrorAndThePolishFinishesTheMeshFlow) {
+  const TriMesh m = test::uneven_disk(12, 24);
+  for (const MeshFlowTargets targets : {MeshFlowTargets::Surface, MeshFlowTargets::Flowing}) {
+    SquareMapOptions o = test_options();
+    o.flow.method = FlowMethod::Mesh;
+    o.flow.mesh.targets = targets;
+    o.stretch_start = false;
+    o.flow.polish.enabled = false;
+    const SquareMapResult alone = square_map(m.V, m.F, o);
+    EXPECT_EQ(alone.flips, 0);
+    EXPECT_LT(alone.flow.final_vertex_mean, 0.5 * alone.flow.initial_vertex_mean);
+    EXPECT_EQ(alone.flow.polish_iterations, 0);
+    EXPECT_DOUBLE_EQ(alone.flow.flow_vertex_mean, alone.flow.final_vertex_mean);
+    if (alone.flow.stop_reason == "stalled" || alone.flow.stop_reason == "step vanished") {
+      EXPECT_NE(alone.flow.stall_detail.find("triangle of vertices"), std::string::npos);
+    }
+    // The polish runs after the mesh method too, from where the flow stopped.
+    o.flow.polish.enabled = true;
+    const SquareMapResult polished = square_map(m.V, m.F, o);
+    EXPECT_EQ(polished.flips, 0);
+    EXPECT_EQ(polished.flow.iterations, alone.flow.iterations);
+    EXPECT_DOUBLE_EQ(polished.flow.flow_vertex_mean, alone.flow.final_vertex_mean);
+    EXPECT_LE(polished.flow.final_vertex_mean, 1.05 * alone.flow.final_vertex_mean);
+  }
+}
