@@ -277,8 +277,10 @@ MatrixXd vertex_gradients(const MatrixXd& UV, const MatrixXi& F, const VectorXd&
   return grad;
 }
 
-// Largest step (capped at 1) keeping every triangle of F positively oriented, times theta.
-double adaptive_step(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta) {
+// The triangle of F with the smallest critical step under displacement D (DLF eq. 5), and that
+// step in *lambda (infinity when no triangle degenerates); -1 when none does.
+Eigen::Index limiting_face(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double* lambda) {
+  Eigen::Index worst = -1;
   double lam = kInf;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     Eigen::Vector2d p[3], d[3];
@@ -286,8 +288,17 @@ double adaptive_step(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, d
       p[c] = UV.row(F(f, c)).head<2>().transpose();
       d[c] = D.row(F(f, c)).head<2>().transpose();
     }
-    lam = std::min(lam, critical_step(p, d));
+    const double l = critical_step(p, d);
+    if (l < lam) lam = l, worst = f;
   }
+  *lambda = lam;
+  return worst;
+}
+
+// Largest step (capped at 1) keeping every triangle of F positively oriented, times theta.
+double adaptive_step(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta) {
+  double lam = kInf;
+  limiting_face(UV, F, D, &lam);
   return std::min(1.0, theta * lam);
 }
 
@@ -778,17 +789,8 @@ void grid_passes(Flow& s) {
 // interior vertex closing in on an unflippable boundary edge, or two sliding boundary vertices
 // closing in on each other).
 std::string limiting_triangle(const MatrixXd& UV, const MatrixXi& F_dom, const MatrixXd& D, const VectorXi& side_mask) {
-  Eigen::Index worst = -1;
   double lam = kInf;
-  for (Eigen::Index f = 0; f < F_dom.rows(); ++f) {
-    Eigen::Vector2d p[3], d[3];
-    for (int c = 0; c < 3; ++c) {
-      p[c] = UV.row(F_dom(f, c)).head<2>().transpose();
-      d[c] = D.row(F_dom(f, c)).head<2>().transpose();
-    }
-    const double l = critical_step(p, d);
-    if (l < lam) lam = l, worst = f;
-  }
+  const Eigen::Index worst = limiting_face(UV, F_dom, D, &lam);
   if (worst < 0) return "";
   int on_side = 0;
   for (int c = 0; c < 3; ++c) on_side += side_mask.size() && side_mask[F_dom(worst, c)] != 0;
