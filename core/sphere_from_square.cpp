@@ -139,6 +139,8 @@ int open_thin_sphere_triangles(MatrixXd& S, const MatrixXi& F, int max_rounds = 
 
 }  // namespace
 
+int sphere_polish_cg_iterations(Eigen::Index faces) { return faces <= 65536 ? 100 : 50; }
+
 MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const SphereFromSquareOptions& opt,
                                 SphereFromSquareReport* rep, const ProgressFn& progress) {
   SphereFromSquareReport local;
@@ -243,7 +245,8 @@ MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const Sphe
     S = moser_sphere_flow(S, F, measure, opt.sphere_flow, &R.sphere_flow);
     if (sphere_flipped_faces(S, F) > 0) repair_sphere_flips(S, F);
   }
-  R.polish_face_error = polish_sphere_face_areas(S, F, measure, opt.polish_iterations);
+  const int cg = opt.polish_cg_iterations > 0 ? opt.polish_cg_iterations : sphere_polish_cg_iterations(F.rows());
+  R.polish_face_error = polish_sphere_face_areas(S, F, measure, opt.polish_iterations, cg);
   open_thin_sphere_triangles(S, F);
   {
     std::ostringstream msg;

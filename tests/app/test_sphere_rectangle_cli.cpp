@@ -367,3 +367,19 @@ TEST(SphereCli, OptimalTransportRefinementOfTheSquareRoute) {
   EXPECT_NE(output.find("--refine omt"), std::string::npos) << output;
   EXPECT_FALSE(std::filesystem::exists(dir + "/f.surf.gii"));
 }
+
+// Issue 13's sphere bar on S1 (fsaverage5 white, default square route): element CV <= 0.004 and
+// per-face mean <= 0.03. Measured: CV 0.0027, per-face 0.0060 (0.0040 / 0.0079 with the native
+// meshes' 50 CG iterations per polish step: sphere_polish_cg_iterations).
+TEST(SphereCli, S1MeetsThePeersBar) {
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  const std::string dir = authalic::test::temp_dir("sphere_s1");
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " sphere " + white + " " + dir + "/s1.surf.gii --metrics " + dir + "/m.json -q", &output), 0)
+      << output;
+  const auto m = read_json(dir + "/m.json").at("metrics");
+  EXPECT_EQ(m.at("flips"), 0);
+  EXPECT_LE(m.at("element_cv").get<double>(), 0.004);
+  EXPECT_LE(m.at("face_ln_area_abs").at("mean").get<double>(), 0.03);
+  EXPECT_LE(m.at("vertex_ln_area_abs").at("mean").get<double>(), 0.01);
+}
