@@ -439,7 +439,11 @@ void run(const FlattenArgs& a) {
       accept_metrics, plain ? accept_metrics.vertex_ln_area.mean : r.flow.final_vertex_mean, plain);
   const std::string failure = a.surface + " (" + region.source + "): the map is not authalic: " + problem;
   if (!problem.empty() && !a.keep_failed)
-    throw ProcessingError(failure + "; nothing was written. Try more passes (--passes 6) or a finer grid (--grid 1024); "
+    throw ProcessingError(failure + "; nothing was written. " +
+                          (a.method == "mesh" ? std::string(a.no_polish ? "Drop --no-polish (the per-face polish finishes the mesh flow) or use "
+                                                                          "the default --method grid; "
+                                                                        : "Try the default --method grid; ")
+                                              : std::string("Try more passes (--passes 6) or a finer grid (--grid 1024); ")) +
                           "--keep-failed writes the map for inspection, marked as failed");
 
   // Outputs: flat surface in mm (area = cortical area), uv in [0, 1]^2, FreeSurfer patch.

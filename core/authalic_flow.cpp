@@ -295,13 +295,6 @@ Eigen::Index limiting_face(const MatrixXd& UV, const MatrixXi& F, const MatrixXd
   return worst;
 }
 
-// Largest step (capped at 1) keeping every triangle of F positively oriented, times theta.
-double adaptive_step(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta) {
-  double lam = kInf;
-  limiting_face(UV, F, D, &lam);
-  return std::min(1.0, theta * lam);
-}
-
 // local_step_positions (core/authalic_flow.h) on the rectangle: vertices kept on their side and inside [0, W] x [0, 1];
 // face_limit (optional): per-face signed area each triangle must stay above, instead of min_area.
 MatrixXd rectangle_step_positions(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta,
@@ -784,20 +777,17 @@ void grid_passes(Flow& s) {
   if (s.met(s.cur)) s.rep.stop_reason = "tolerance";
 }
 
-// The triangle of F_dom that limits the adaptive step (DLF eq. 5), described for the report:
-// which of its vertices lie on which side. A stalled flow names it (measured on fsaverage5: an
-// interior vertex closing in on an unflippable boundary edge, or two sliding boundary vertices
-// closing in on each other).
-std::string limiting_triangle(const MatrixXd& UV, const MatrixXi& F_dom, const MatrixXd& D, const VectorXi& side_mask) {
-  double lam = kInf;
-  const Eigen::Index worst = limiting_face(UV, F_dom, D, &lam);
-  if (worst < 0) return "";
+// Triangle f of F_dom described for the report: its vertices, how many lie on the boundary and its
+// area against the mean. A stalled flow names the triangle that limits its step (measured on
+// fsaverage5: an interior vertex closing in on an unflippable boundary edge).
+std::string describe_triangle(const MatrixXd& UV, const MatrixXi& F_dom, Eigen::Index f, const VectorXi& side_mask) {
+  if (f < 0) return "";
   int on_side = 0;
-  for (int c = 0; c < 3; ++c) on_side += side_mask.size() && side_mask[F_dom(worst, c)] != 0;
+  for (int c = 0; c < 3; ++c) on_side += side_mask.size() && side_mask[F_dom(f, c)] != 0;
   const VectorXd a = signed_face_areas_2d(UV, F_dom);
   std::ostringstream os;
-  os << "triangle of vertices " << F_dom(worst, 0) << ", " << F_dom(worst, 1) << ", " << F_dom(worst, 2) << " (" << on_side
-     << " on the boundary), area " << a[worst] / (a.cwiseAbs().sum() / static_cast<double>(a.size())) << " of the mean";
+  os << "triangle of vertices " << F_dom(f, 0) << ", " << F_dom(f, 1) << ", " << F_dom(f, 2) << " (" << on_side
+     << " on the boundary), area " << a[f] / (a.cwiseAbs().sum() / static_cast<double>(a.size())) << " of the mean";
   return os.str();
 }
 
@@ -842,14 +832,16 @@ void mesh_steps(Flow& s) {
       vertex_target = vertex_share(target_face_measure(s.V, Fd, opt.density, s.w), Fd, s.nv);
     const double fraction = fixed > 0 ? 1.0 / (fixed - k) : 1.0;
     const MatrixXd D = lie_displacement(s.UV, Fd, vertex_target, fraction, s.side_mask);
-    const double lambda = fixed > 0 ? std::min(1.0, adaptive_step(s.UV, Fd, D, 1.0) < 1.0 ? opt.theta * adaptive_step(s.UV, Fd, D, 1.0) : 1.0)
-                                    : adaptive_step(s.UV, Fd, D, opt.theta);
+    // One scan gives the critical step (eq. 5) and the triangle it comes from. Zou's schedule takes
+    // its full step unless a triangle would flip, then theta of the critical step.
+    double critical = kInf;
+    const Eigen::Index limiting = limiting_face(s.UV, Fd, D, &critical);
+    const double lambda = fixed > 0 ? (critical < 1.0 ? opt.theta * critical : 1.0) : std::min(1.0, opt.theta * critical);
     if (!(lambda > 1e-12)) {
       s.rep.stop_reason = "step vanished";
-      s.rep.stall_detail = limiting_triangle(s.UV, Fd, D, s.side_mask);
+      s.rep.stall_detail = describe_triangle(s.UV, Fd, limiting, s.side_mask);
       break;
     }
-    const std::string limiting = fixed > 0 ? "" : limiting_triangle(s.UV, Fd, D, s.side_mask);
     apply_displacement(s.UV, D, lambda, s.side_mask, s.w);
     s.cur = s.stats_of(s.UV);
     ++s.rep.iterations;
@@ -865,7 +857,7 @@ void mesh_steps(Flow& s) {
       since_best = 0;
     } else if (++since_best == kMeshStallSteps) {
       s.rep.stop_reason = "stalled";
-      s.rep.stall_detail = limiting;
+      s.rep.stall_detail = describe_triangle(s.UV, Fd, limiting, s.side_mask);
       break;
     }
   }
