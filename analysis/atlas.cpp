@@ -32,6 +32,7 @@ std::string atlas_identity(const AtlasFiles& f) {
 }
 
 std::string atlas_mode(const AtlasFiles& files) { return "atlas " + atlas_identity(files); }
+std::string registration_mode(const AtlasFiles& files) { return "registration " + atlas_identity(files); }
 
 Atlas load_atlas(const AtlasFiles& files, const ProgressFn& progress) {
   Atlas A;

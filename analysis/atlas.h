@@ -28,6 +28,9 @@ AtlasFiles atlas_files_from_dir(const std::string& dir, const std::string& hemi)
 // three atlas files' SHA-256s (the same atlas files give the same identity wherever they lie).
 std::string atlas_identity(const AtlasFiles& files);
 std::string atlas_mode(const AtlasFiles& files);
+// Registration mode (no sphere.reg: the subject's own map aligned to the atlas's by an
+// area-preserving deformation, core/atlas_map.h square_map_registered): "registration <identity>".
+std::string registration_mode(const AtlasFiles& files);
 
 struct Atlas {
   AtlasFiles files;

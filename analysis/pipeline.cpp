@@ -221,13 +221,23 @@ std::string map_hemisphere(Hemisphere& h, const ProgressFn& progress) {
     h.map = square_map(h.white.mesh.V, h.cortex_faces, options, progress);
     return "per-subject correspondence";
   }
+  std::ostringstream s;
+  if (h.sphere_reg.empty()) {
+    RegisteredMapResult r = square_map_registered(h.white.mesh.V, h.cortex_faces, h.atlas->square, options, {}, 32, progress);
+    h.map = std::move(r.map);
+    s << "registration to the atlas map (" << h.atlas->files.white << ", identity " << h.atlas->identity
+      << ") by sulcal depth: correlation " << r.registration.correlation_before << " -> " << r.registration.correlation_after
+      << " in " << r.registration.iterations << " area-preserving steps, vertices moved by median "
+      << r.registration_displacement.median << ", max " << r.registration_displacement.max
+      << " elements (K = 32); the flow then moved them by median " << r.displacement.median << " elements";
+    return s.str();
+  }
   const io::Surface reg = io::read_surface(h.sphere_reg);
   if (reg.mesh.num_vertices() != h.white.mesh.num_vertices())
     throw InputError(h.sphere_reg + ": has " + std::to_string(reg.mesh.num_vertices()) + " vertices but the " + h.name +
                      " white surface has " + std::to_string(h.white.mesh.num_vertices()) + "; give this hemisphere's sphere.reg");
   AtlasMapResult r = square_map_from_atlas(h.white.mesh.V, h.cortex_faces, reg.mesh.V, h.atlas->square, options, 32, progress);
   h.map = std::move(r.map);
-  std::ostringstream s;
   s << "atlas correspondence (" << h.atlas->files.white << ", identity " << h.atlas->identity << "): "
     << r.transfer.outside << " vertices outside the atlas cortex (" << 100 * r.transfer.outside_area_share
     << " % of the area, placed at its nearest point); the flow moved vertices from the atlas position by median "
@@ -235,22 +245,23 @@ std::string map_hemisphere(Hemisphere& h, const ProgressFn& progress) {
   return s.str();
 }
 
-// Atlas or per-subject correspondence (issue 14): the atlas is used when --atlas is given and both
-// hemispheres have a sphere.reg; otherwise per subject, with a warning saying why. Loads the atlas
-// hemispheres (their maps are computed here). Returns the mode recorded in every output.
+// Atlas, registration or per-subject correspondence (issue 14). With --atlas: through sphere.reg
+// when both hemispheres have one, else registered to the atlas map by sulcal depth (with a
+// warning saying why). Loads the atlas hemispheres (their maps are computed here). Returns the
+// mode recorded in every output.
 std::string choose_correspondence(Hemisphere (&hemis)[2], const SubjectInputs& in, const RunOptions& options,
                                   RunSummary& summary, const ProgressFn& progress) {
   if (options.atlas_dir.empty()) return kPerSubjectCorrespondence;
-  if (in.lh_sphere_reg.empty() || in.rh_sphere_reg.empty()) {
+  const bool registered = in.lh_sphere_reg.empty() || in.rh_sphere_reg.empty();
+  if (registered)
     summary.warnings.push_back(std::string("--atlas ") + options.atlas_dir + ": the subject has no " +
                                (in.lh_sphere_reg.empty() ? "lh" : "rh") +
                                ".sphere.reg (FreeSurfer's surf/?h.sphere.reg, or --lh-sphere-reg/--rh-sphere-reg): the maps "
-                               "were made per subject, not in atlas correspondence; compare them only with a per-subject reference");
-    return kPerSubjectCorrespondence;
-  }
-  std::string mode = "atlas";
+                               "were registered to the atlas's by sulcal depth (mode 'registration'), not carried through "
+                               "FreeSurfer's registration; compare them only with a reference built in registration mode");
+  std::string mode = registered ? "registration" : "atlas";
   for (Hemisphere& h : hemis) {
-    h.sphere_reg = h.left ? in.lh_sphere_reg : in.rh_sphere_reg;
+    h.sphere_reg = registered ? "" : (h.left ? in.lh_sphere_reg : in.rh_sphere_reg);
     h.atlas = std::make_unique<Atlas>(load_atlas(atlas_files_from_dir(options.atlas_dir, h.left ? "lh" : "rh"), progress));
     mode += (h.left ? " " : "+") + h.atlas->identity;
   }

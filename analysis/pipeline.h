@@ -91,7 +91,8 @@ struct RunOptions {
   std::string command_line;     // as invoked, recorded in every sidecar (provenance); may be empty
   // Atlas folder in FreeSurfer layout (analysis/atlas.h): with both sphere.reg inputs the maps start
   // from the atlas's map carried through sphere.reg (elements correspond across subjects); without
-  // them the run is per subject and says so (a warning).
+  // them the subject's maps are registered to the atlas's by sulcal depth (core/atlas_map.h,
+  // square_map_registered; mode "registration") and the run says so (a warning).
   std::string atlas_dir;
 };
 

@@ -36,6 +36,7 @@ struct FlattenArgs {
   std::string density, shading;
   // Atlas correspondence (issue 14): the subject's sphere.reg and the atlas.
   std::string sphere_reg, atlas_dir, atlas_surface, atlas_sphere, atlas_label, atlas_faces_from;
+  bool register_to_atlas = false;  // registration mode: no sphere.reg, aligned by sulcal depth
   std::string method = "grid";
   std::string mesh_targets = "surface";
   std::string domain = "square";  // or "disk" (the square map carried onto the disk, core/disk_map.h)
@@ -163,11 +164,16 @@ nlohmann::json transport_json(const SquareMapResult& r, const SquareMapOptions& 
 analysis::AtlasFiles atlas_files(const FlattenArgs& a, const io::Surface& surface) {
   const bool explicit_atlas = !a.atlas_surface.empty() || !a.atlas_sphere.empty() || !a.atlas_label.empty() ||
                               !a.atlas_faces_from.empty();
-  if (a.sphere_reg.empty()) {
+  if (a.register_to_atlas && !a.sphere_reg.empty())
+    throw InputError("flatten: give --sphere-reg (atlas correspondence through FreeSurfer's registration) or --register "
+                     "(alignment by sulcal depth without one), not both");
+  if (a.sphere_reg.empty() && !a.register_to_atlas) {
     if (explicit_atlas || !a.atlas_dir.empty())
-      throw InputError("flatten: the atlas options need --sphere-reg (the subject's ?h.sphere.reg: its vertices on the atlas sphere)");
+      throw InputError("flatten: the atlas options need --sphere-reg (the subject's ?h.sphere.reg: its vertices on the atlas "
+                       "sphere) or --register (alignment to the atlas's map by sulcal depth)");
     return {};
   }
+  const std::string how = a.register_to_atlas ? "--register" : "--sphere-reg";
   if (!a.atlas_dir.empty()) {
     const std::string hemi = analysis::hemisphere_of(surface.metadata, a.surface);
     if (hemi == "unknown")
@@ -176,13 +182,36 @@ analysis::AtlasFiles atlas_files(const FlattenArgs& a, const io::Surface& surfac
     return analysis::atlas_files_from_dir(a.atlas_dir, hemi == "left" ? "lh" : "rh");
   }
   if (a.atlas_surface.empty() || a.atlas_sphere.empty() || a.atlas_label.empty() == a.atlas_faces_from.empty())
-    throw InputError("flatten: --sphere-reg needs the atlas: --atlas DIR, or --atlas-surface, --atlas-sphere and one of "
+    throw InputError("flatten: " + how + " needs the atlas: --atlas DIR, or --atlas-surface, --atlas-sphere and one of "
                      "--atlas-label, --atlas-faces-from");
   return {a.atlas_surface, a.atlas_sphere, a.atlas_label.empty() ? a.atlas_faces_from : a.atlas_label};
 }
 
-// The map: per subject (square_map), or in atlas correspondence (the atlas's map carried through
-// sphere.reg, then made authalic: core/atlas_map.h). *correspondence: the mode and its numbers.
+nlohmann::json displacement_json(const Displacement& d, int k) {
+  return {{"k", k}, {"median", d.median}, {"p95", d.p95}, {"max", d.max}};
+}
+
+// Registration mode: the subject's own map aligned to the atlas's (core/atlas_map.h).
+SquareMapResult map_region_registered(const FlattenArgs& a, const io::Surface& surface, const MatrixXi& region,
+                                      const analysis::AtlasFiles& files, const SquareMapOptions& options,
+                                      const ProgressFn& progress, nlohmann::json* correspondence) {
+  const analysis::Atlas atlas = analysis::load_atlas(files, progress);
+  RegisteredMapResult r = square_map_registered(surface.mesh.V, region, atlas.square, options, {}, a.k, progress);
+  *correspondence = {{"mode", analysis::registration_mode(files)},
+                     {"atlas", {{"white", files.white}, {"sphere", files.sphere}, {"cortex", files.cortex}, {"identity", atlas.identity}}},
+                     {"feature", "sulcal depth (core/sulcal_depth.h) of each cortex region"},
+                     {"depth_correlation_before", r.registration.correlation_before},
+                     {"depth_correlation_after", r.registration.correlation_after},
+                     {"registration_iterations", r.registration.iterations},
+                     {"registration_displacement_elements", displacement_json(r.registration_displacement, a.k)},
+                     {"start_vertices_repaired", r.map.start_repaired},
+                     {"flow_displacement_elements", displacement_json(r.displacement, a.k)}};
+  return std::move(r.map);
+}
+
+// The map: per subject (square_map), in atlas correspondence (the atlas's map carried through
+// sphere.reg, then made authalic: core/atlas_map.h) or registered to the atlas's map.
+// *correspondence: the mode and its numbers.
 SquareMapResult map_region(const FlattenArgs& a, const io::Surface& surface, const MatrixXi& region,
                            const SquareMapOptions& options, const ProgressFn& progress, nlohmann::json* correspondence) {
   const analysis::AtlasFiles files = atlas_files(a, surface);
@@ -190,6 +219,7 @@ SquareMapResult map_region(const FlattenArgs& a, const io::Surface& surface, con
     *correspondence = {{"mode", analysis::kPerSubjectCorrespondence}};
     return square_map(surface.mesh.V, region, options, progress);
   }
+  if (a.register_to_atlas) return map_region_registered(a, surface, region, files, options, progress, correspondence);
   const io::Surface reg = io::read_surface(a.sphere_reg);
   if (reg.mesh.num_vertices() != surface.mesh.num_vertices())
     throw InputError(a.sphere_reg + ": has " + std::to_string(reg.mesh.num_vertices()) + " vertices but " + a.surface + " has " +
@@ -203,8 +233,7 @@ SquareMapResult map_region(const FlattenArgs& a, const io::Surface& surface, con
                      {"vertices_outside_atlas_cortex", r.transfer.outside},
                      {"area_share_outside_atlas_cortex", r.transfer.outside_area_share},
                      {"start_vertices_repaired", r.map.start_repaired},
-                     {"flow_displacement_elements",
-                      {{"k", a.k}, {"median", r.displacement.median}, {"p95", r.displacement.p95}, {"max", r.displacement.max}}}};
+                     {"flow_displacement_elements", displacement_json(r.displacement, a.k)}};
   return std::move(r.map);
 }
 
@@ -578,6 +607,10 @@ void setup(CLI::App& parent) {
                   "atlas's authalic map is carried to the subject through it (barycentric on the atlas sphere) and made "
                   "authalic for this subject, so elements cover the same anatomy in every subject; needs --atlas or the "
                   "--atlas-* files");
+  sub->add_flag("--register", a->register_to_atlas,
+                "Registration mode, for surfaces without a sphere.reg: the subject's own authalic map is aligned to the "
+                "atlas's (--atlas or the --atlas-* files) by an area-preserving (divergence-free) deformation of the square "
+                "driven by both cortices' sulcal depth, then made exactly authalic again; recorded as mode 'registration'");
   sub->add_option("--atlas", a->atlas_dir,
                   "Atlas folder in FreeSurfer layout (surf/?h.white, surf/?h.sphere, label/?h.cortex.label; e.g. "
                   "$FREESURFER_HOME/subjects/fsaverage); the hemisphere is the surface's");

@@ -302,7 +302,8 @@ const bool registered = register_command({60, [](CLI::App& parent) {
   sub->add_flag("--no-rescale", [args](std::int64_t) { args->rescale = false; }, "As `run --no-rescale`, for the patients");
   sub->add_option("--atlas", args->atlas,
                   "As `run --atlas`: atlas folder (FreeSurfer layout); subjects with lh_sphere_reg and rh_sphere_reg "
-                  "columns are mapped in atlas correspondence (the reference records the mode; others are refused by it)");
+                  "columns are mapped in atlas correspondence, others registered to the atlas map by sulcal depth (the "
+                  "reference records the mode and refuses a subject of another)");
   sub->add_option("--normative", args->normative,
                   "Compare the patients with this existing reference (authalic normative build) instead of building one "
                   "from the controls; its K must match --k (checked before any map)")

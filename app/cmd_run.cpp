@@ -52,7 +52,8 @@ int run(RunArgs& a) {
            std::string(in.lh_sphere_reg.empty() ? ")" : "; give --atlas DIR to map through surf/?h.sphere.reg)"));
     else if (in.lh_sphere_reg.empty() || in.rh_sphere_reg.empty())
       info("authalic run: " + subjects_dir + "/" + a.subject + "/surf/" + (in.lh_sphere_reg.empty() ? "lh" : "rh") +
-           ".sphere.reg is missing: per-subject element correspondence instead of the atlas's");
+           ".sphere.reg is missing: element correspondence by registration to the atlas map (sulcal depth) instead "
+           "of through FreeSurfer's registration");
     else
       info("authalic run: atlas element correspondence through surf/?h.sphere.reg (atlas " + a.options.atlas_dir + ")");
   } else {
@@ -128,8 +129,9 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_option("--atlas", a->options.atlas_dir,
                   "Atlas folder in FreeSurfer layout (surf/?h.white, surf/?h.sphere, label/?h.cortex.label; e.g. "
                   "$FREESURFER_HOME/subjects/fsaverage): the maps start from the atlas's authalic map carried through the "
-                  "subject's sphere.reg, so elements cover the same anatomy in every subject. Without a sphere.reg the run "
-                  "is per subject and says so");
+                  "subject's sphere.reg, so elements cover the same anatomy in every subject. Without a sphere.reg the "
+                  "subject's maps are registered to the atlas's by sulcal depth (an area-preserving deformation; mode "
+                  "'registration') and the run says so");
   sub->add_option("--lh-sphere-reg", in.lh_sphere_reg, "Left ?h.sphere.reg (with --atlas; --subjects-dir finds surf/lh.sphere.reg)");
   sub->add_option("--rh-sphere-reg", in.rh_sphere_reg, "Right ?h.sphere.reg");
   sub->add_option("--normative", in.normative, "Normative reference (authalic normative build): adds z-scores");

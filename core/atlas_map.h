@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "core/conformal_map.h"
+#include "core/flat_registration.h"
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "core/square_map.h"
@@ -72,17 +73,20 @@ AtlasTransfer transfer_atlas_map(const MatrixXd& atlas_S, const MatrixXi& atlas_
 // Perimeter coordinates (core/conformal_map.h, rectangle_perimeter_point) for the boundary loop of
 // the disk F (walked as conformal_rectangle_map walks it) that follow a starting map UV (#V x 2):
 // each boundary vertex takes the perimeter coordinate of the rectangle-boundary point nearest to its
-// UV; where they go backwards along the loop they are replaced by their increasing least-squares
-// fit (pool adjacent violators) and kept 2 % of the loop's mean step apart, so the coordinates
-// increase once around it.
+// UV; they are replaced by their increasing least-squares fit (pool adjacent violators) in which
+// each boundary edge advances by at least min_step (> 0, < 1) of its share of the loop's 3D length
+// (V #V x 3), so the coordinates increase once around it and no stretch of the boundary is bunched.
 // Returns #V values (NaN off the boundary). Throws ProcessingError when UV's boundary does not wind
 // once counter-clockwise around the rectangle (e.g. an atlas of the other hemisphere).
-std::vector<double> boundary_perimeter_from_map(const MatrixXd& UV, const MatrixXi& F, int num_vertices, double width);
+std::vector<double> boundary_perimeter_from_map(const MatrixXd& UV, const MatrixXd& V, const MatrixXi& F, double width,
+                                                double min_step = 0.5);
 
 // The starting map on the conformal map's mesh: boundary vertices keep init.UV (on their sides,
 // placed by the perimeter coordinates above), interior vertices take start_uv (input vertices; the
 // inserted ones interpolated like their positions), pulled 1e-9 inside the rectangle; triangles the
-// transfer folds are repaired (repair_flips, then untangle_flips). *repaired: vertices moved.
+// transfer folds are repaired (repair_flips, then untangle_flips), and those it crushes below 5 % of
+// their target area (3D share) lifted by neighbour means (the grid flow stalls on them otherwise).
+// *repaired: vertices moved.
 // Throws ProcessingError when folds remain.
 MatrixXd start_from_map(const ConformalMapResult& init, const MatrixXd& start_uv, int* repaired);
 
@@ -112,5 +116,22 @@ struct AtlasMapResult {
 // V #V x 3 (mm), F the subject's cortex faces, sphere_reg #V x 3 (any radius: normalised).
 AtlasMapResult square_map_from_atlas(const MatrixXd& V, const MatrixXi& F, const MatrixXd& sphere_reg, const AtlasSquare& atlas,
                                      SquareMapOptions options = {}, int k = 32, const ProgressFn& progress = {});
+
+// Registration mode (issue 14 part 2; no sphere.reg, e.g. GIFTI from another pipeline): the
+// subject's own authalic map (square_map), aligned to the atlas's map by the area-preserving
+// deformation of core/flat_registration.h driven by both cortices' sulcal depth
+// (core/sulcal_depth.h, each on its own cortex region), then made exactly authalic again by the
+// flow from that start. The atlas must be of the same hemisphere (the maps' orientation rule then
+// puts the frontal pole at the top middle of both).
+struct RegisteredMapResult {
+  SquareMapResult map;                   // the subject's map (UV_initial: the registered start)
+  FlatRegistrationReport registration;
+  Displacement registration_displacement;  // the registration's move from the subject's own map (elements)
+  Displacement displacement;             // the flow's move from the registered start (elements)
+};
+// V #V x 3 (mm), F the subject's cortex faces; atlas: atlas_square_map of the same hemisphere.
+RegisteredMapResult square_map_registered(const MatrixXd& V, const MatrixXi& F, const AtlasSquare& atlas, SquareMapOptions options = {},
+                                          const FlatRegistrationOptions& registration = {}, int k = 32,
+                                          const ProgressFn& progress = {});
 
 }  // namespace authalic

@@ -64,6 +64,12 @@ struct SquareMapOptions {
   // arc length and the anchor, the interior starts at it (no stretch-energy start), and the flow
   // makes it authalic. UV_initial is then this start.
   MatrixXd start_uv;
+  // With start_uv: the least step of each boundary vertex along the start's perimeter, as a share
+  // of its edge's share of the boundary's 3D length (core/atlas_map.h boundary_perimeter_from_map).
+  // 0.5 for a transferred atlas map, whose boundary vertices bunch where the subject's cortex
+  // boundary and the atlas's differ; a start that is already a flip-free map of this surface (the
+  // registration mode) keeps its boundary with a small value.
+  double start_min_boundary_step = 0.5;
 };
 
 struct SquareMapResult {

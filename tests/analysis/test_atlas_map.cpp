@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/metrics.h"
 #include "core/region.h"
+#include "core/square_map.h"
 #include "io/surface_io.h"
 
 namespace authalic {
@@ -125,6 +126,50 @@ TEST(AtlasMap, KnownRotationOfTheSphereRegIsUndone) {
     EXPECT_NE(std::string(e.what()).find("stay folded"), std::string::npos) << e.what();
   }
   EXPECT_LE(map_metrics(right.map.V, right.map.UV, right.map.F, Domain::square(), 32).element_cv, 0.005);
+}
+
+// Registration mode (no sphere.reg): the same rotated subject, mapped on its own and then aligned
+// to the atlas map by sulcal depth with an area-preserving deformation (square_map_registered),
+// lands most of its area in the atlas's element; mapped per subject it does not. The map stays
+// authalic, and a subject identical to the atlas is not moved.
+TEST(AtlasMap, RegistrationWithoutTheSphereRegUndoesMostOfAKnownRotation) {
+  AUTHALIC_REQUIRE_SHARED(white_path, "fsaverage5/white_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(sphere_path, "fsaverage5/sphere_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(flat_path, "fsaverage5/flat_left.gii.gz");
+  const Fsaverage5 d = read_fsaverage5(white_path, sphere_path, flat_path);
+  const MatrixXi atlas_cortex = cortex_from_flat_vertices(d);
+  const AtlasSquare atlas = atlas_square_map(d.white.mesh.V, d.sphere.mesh.V, atlas_cortex);
+
+  const MatrixXd S = normalize_to_unit_sphere(d.sphere.mesh.V, "sphere");
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(12.0 * M_PI / 180.0, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
+  const MatrixXd reg = S * R.transpose();
+  const MatrixXd V = interpolate_on_sphere(SpherePointLocator(S, d.white.mesh.F), d.white.mesh.V, reg);
+  std::vector<char> inside;
+  interpolate_on_sphere(SpherePointLocator(S, atlas_cortex), S, reg, &inside);
+  const MatrixXi cortex = region_faces_from_vertices(V, d.white.mesh.F, std::vector<bool>(inside.begin(), inside.end())).F;
+  const MatrixXd truth = interpolate_on_sphere(SpherePointLocator(atlas.S, atlas.map.F), atlas.map.UV, reg);
+  const Eigen::Index n = V.rows();
+
+  const SquareMapResult own = square_map(V, cortex, {});
+  double shift_own = 0, shift_reg = 0;
+  const double same_own = analysis::same_element_share(own.UV.topRows(n), truth, V, cortex, 32, &shift_own);
+  const RegisteredMapResult r = square_map_registered(V, cortex, atlas);
+  const double same_reg = analysis::same_element_share(r.map.UV.topRows(n), truth, V, cortex, 32, &shift_reg);
+  std::cout << "[ rotated subject without sphere.reg: per subject same element " << same_own << " (median shift " << shift_own
+            << "), registered " << same_reg << " (" << shift_reg << "); depth correlation " << r.registration.correlation_before
+            << " -> " << r.registration.correlation_after << "; flow moved median " << r.displacement.median << " elements ]\n";
+  EXPECT_GT(r.registration.correlation_after, r.registration.correlation_before);
+  EXPECT_GE(same_reg, same_own + 0.2);
+  EXPECT_LT(shift_reg, 0.5 * shift_own);
+  EXPECT_EQ(r.map.flips, 0);
+  EXPECT_EQ(r.map.start_repaired, 0);  // the registered start folds nothing
+  EXPECT_LT(r.displacement.median, 0.1);  // and is nearly authalic already
+  EXPECT_LE(map_metrics(r.map.V, r.map.UV, r.map.F, Domain::square(), 32).element_cv, 0.005);
+
+  // The atlas itself: its own map is the atlas map, so nothing moves.
+  const RegisteredMapResult same = square_map_registered(d.white.mesh.V, atlas_cortex, atlas);
+  EXPECT_EQ(same.registration.iterations, 0);
+  EXPECT_GE(analysis::same_element_share(same.map.UV.topRows(n), atlas.map.UV.topRows(n), d.white.mesh.V, atlas_cortex, 32), 0.98);
 }
 
 }  // namespace

@@ -46,6 +46,7 @@ TEST(AtlasCli, FlattenInAtlasModeRecordsTheModeAndNormativeRefusesMixedModes) {
   // Atlas options without a sphere.reg (and the reverse) are refused.
   EXPECT_EQ(test::run_command(exe + " flatten " + white + " " + dir + "/x.surf.gii --faces-from " + flat + atlas, &out), 2) << out;
   EXPECT_NE(out.find("need --sphere-reg"), std::string::npos) << out;
+  EXPECT_NE(out.find("or --register"), std::string::npos) << out;
   EXPECT_EQ(test::run_command(exe + " flatten " + white + " " + dir + "/x.surf.gii --faces-from " + flat + " --sphere-reg " + sphere, &out),
             2) << out;
   EXPECT_NE(out.find("--sphere-reg needs the atlas"), std::string::npos) << out;
@@ -69,6 +70,67 @@ TEST(AtlasCli, FlattenInAtlasModeRecordsTheModeAndNormativeRefusesMixedModes) {
       << out;
   EXPECT_NE(out.find("the element correspondence is 'per-subject' but"), std::string::npos) << out;
   EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;  // one line
+}
+
+// Registration mode (`flatten --register`: no sphere.reg; the subject's own map aligned to the
+// atlas's by sulcal depth): recorded as "registration <atlas identity>", its option errors, and a
+// reference built in it refusing an atlas-mode patient of the same atlas.
+TEST(AtlasCli, FlattenInRegistrationModeRecordsTheModeAndNormativeRefusesAtlasMode) {
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(sphere, "fsaverage5/sphere_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(flat, "fsaverage5/flat_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(sulc, "fsaverage5/sulc_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(curv, "fsaverage5/curv_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(thick, "fsaverage5/thick_left.gii.gz");
+  const std::string dir = test::temp_dir("registration_cli");
+  const std::string exe = test::authalic_binary();
+  const std::string atlas = " --atlas-surface " + white + " --atlas-sphere " + sphere + " --atlas-faces-from " + flat;
+  const std::string subject = exe + " flatten " + white + " ";
+  std::string out;
+  // The subject is the atlas: registered, nothing moves.
+  ASSERT_EQ(test::run_command(subject + dir + "/reg.surf.gii --faces-from " + flat + " --register" + atlas + " --metrics " + dir +
+                                  "/reg.json --quiet",
+                              &out),
+            0)
+      << out;
+  const nlohmann::json m = nlohmann::json::parse(std::ifstream(dir + "/reg.json"));
+  const std::string mode = m["correspondence"]["mode"];
+  EXPECT_EQ(mode.rfind("registration ", 0), 0u) << mode;
+  EXPECT_EQ(mode.size(), 13u + 16u) << mode;
+  EXPECT_EQ(m["correspondence"]["registration_iterations"], 0);
+  EXPECT_NEAR(m["correspondence"]["depth_correlation_after"].get<double>(), 1.0, 1e-9);
+  EXPECT_EQ(m["flips"], 0);
+  EXPECT_EQ(io::read_surface(dir + "/reg.surf.gii").metadata.at("authalic_correspondence"), mode);
+
+  // Option errors: one line each, exit 2, no map written.
+  EXPECT_EQ(test::run_command(subject + dir + "/x.surf.gii --faces-from " + flat + " --register --sphere-reg " + sphere + atlas, &out), 2)
+      << out;
+  EXPECT_NE(out.find("not both"), std::string::npos) << out;
+  EXPECT_EQ(test::run_command(subject + dir + "/x.surf.gii --faces-from " + flat + " --register", &out), 2) << out;
+  EXPECT_NE(out.find("--register needs the atlas"), std::string::npos) << out;
+  EXPECT_FALSE(std::ifstream(dir + "/x.surf.gii").good());
+
+  // A reference of registration-mode controls refuses a patient mapped through sphere.reg on the same atlas.
+  std::string tables;
+  for (int s = 0; s < 3; ++s) {
+    const std::string p = dir + "/c" + std::to_string(s);
+    ASSERT_EQ(test::run_command(exe + " elements " + white + " " + dir + "/reg.surf.gii " + (s == 0 ? sulc : s == 1 ? curv : thick) + " " +
+                                    p + " --k 8 --subject c" + std::to_string(s) + " --quiet",
+                                &out),
+              0)
+        << out;
+    tables += " " + p + ".tsv";
+  }
+  ASSERT_EQ(test::run_command(exe + " normative build " + dir + "/ref.json" + tables + " --quiet", &out), 0) << out;
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(dir + "/ref.json"))["correspondence"], mode);
+  ASSERT_EQ(test::run_command(subject + dir + "/atl.surf.gii --faces-from " + flat + " --sphere-reg " + sphere + atlas + " --quiet", &out), 0)
+      << out;
+  ASSERT_EQ(test::run_command(exe + " elements " + white + " " + dir + "/atl.surf.gii " + sulc + " " + dir + "/p --k 8 --subject p --quiet", &out), 0)
+      << out;
+  EXPECT_EQ(test::run_command(exe + " normative compare " + dir + "/ref.json " + dir + "/p.tsv " + dir + "/cmp --quiet", &out), 2)
+      << out;
+  EXPECT_NE(out.find("the element correspondence is 'atlas " + mode.substr(13) + "' but"), std::string::npos) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
 }
 
 }  // namespace
