@@ -19,10 +19,13 @@
 //  4. the Leray projection on the staggered (MAC) grid: normal components on the sides set to 0,
 //     then v = f − ∇φ with Δφ = div f (Neumann; core/poisson_dct.h), so the discrete divergence is
 //     exactly 0 in every cell and no velocity crosses a side (boundary vertices slide along it);
-//  5. the step is capped (largest vertex move, largest |∇v| dt) and the vertices move by one RK4
-//     step; the iteration is kept only when it lowers the area-weighted mismatch
-//     Σ w (f_subject − A(u))² / Σ w.
-// A level ends when 5 iterations in a row lower the mismatch by less than 0.1 %.
+//  5. the step is capped (largest vertex move, largest |∇v| dt), halved while it would fold a
+//     triangle (a smooth divergence-free flow does not fold, but a mesh's straight edges see it only
+//     at their ends), and the vertices move by one RK4 step; the iteration is kept only when it
+//     lowers the images' mismatch Σ ρ (S − A)² / Σ ρ (ρ: the subject's splatted weights).
+// A level ends when 5 iterations in a row lower the mismatch by less than 0.1 %, or when a step
+// no longer lowers it. Measured (tests/core/test_flat_registration.cpp): a known swirl of about one
+// element is undone to 3 % of it with face areas kept within 0.65 % (mean |ln ratio|).
 #include <vector>
 
 #include "core/mesh.h"
