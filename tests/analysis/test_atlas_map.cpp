@@ -34,6 +34,26 @@ MatrixXi cortex_from_flat_vertices(const Fsaverage5& d) {
   return region_faces_from_vertices(d.white.mesh.V, d.white.mesh.F, in).F;
 }
 
+// The atlas anatomy resampled at R s (s: the atlas sphere positions of fsaverage5's vertices, R a
+// rotation by 12 degrees, about 2-3 elements): its surface, cortex, sphere.reg (R s) and, per
+// vertex, where its anatomy sits on the atlas map.
+struct RotatedSubject {
+  MatrixXd V, reg, truth;
+  MatrixXi cortex;
+};
+RotatedSubject rotated_subject(const Fsaverage5& d, const MatrixXi& atlas_cortex, const AtlasSquare& atlas) {
+  RotatedSubject r;
+  const MatrixXd S = normalize_to_unit_sphere(d.sphere.mesh.V, "sphere");
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(12.0 * M_PI / 180.0, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
+  r.reg = S * R.transpose();  // rows R s
+  r.V = interpolate_on_sphere(SpherePointLocator(S, d.white.mesh.F), d.white.mesh.V, r.reg);
+  std::vector<char> inside;
+  interpolate_on_sphere(SpherePointLocator(S, atlas_cortex), S, r.reg, &inside);
+  r.cortex = region_faces_from_vertices(r.V, d.white.mesh.F, std::vector<bool>(inside.begin(), inside.end())).F;
+  r.truth = interpolate_on_sphere(SpherePointLocator(atlas.S, atlas.map.F), atlas.map.UV, r.reg);
+  return r;
+}
+
 TEST(AtlasMap, LocatorFindsVerticesAndReconstructsPoints) {
   AUTHALIC_REQUIRE_SHARED(sphere_path, "fsaverage5/sphere_left.gii.gz");
   const io::Surface sphere = io::read_surface(sphere_path);
@@ -92,14 +112,9 @@ TEST(AtlasMap, KnownRotationOfTheSphereRegIsUndone) {
   const AtlasSquare atlas = atlas_square_map(d.white.mesh.V, d.sphere.mesh.V, atlas_cortex);
 
   const MatrixXd S = normalize_to_unit_sphere(d.sphere.mesh.V, "sphere");
-  const Eigen::Matrix3d R = Eigen::AngleAxisd(12.0 * M_PI / 180.0, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
-  const MatrixXd reg = S * R.transpose();  // rows R s
-  const MatrixXd V = interpolate_on_sphere(SpherePointLocator(S, d.white.mesh.F), d.white.mesh.V, reg);
-  std::vector<char> inside;
-  interpolate_on_sphere(SpherePointLocator(S, atlas_cortex), S, reg, &inside);
-  const MatrixXi cortex = region_faces_from_vertices(V, d.white.mesh.F, std::vector<bool>(inside.begin(), inside.end())).F;
-  // Where each subject vertex's anatomy sits on the atlas map.
-  const MatrixXd truth = interpolate_on_sphere(SpherePointLocator(atlas.S, atlas.map.F), atlas.map.UV, reg);
+  const RotatedSubject sub = rotated_subject(d, atlas_cortex, atlas);
+  const MatrixXd &V = sub.V, &reg = sub.reg, &truth = sub.truth;
+  const MatrixXi& cortex = sub.cortex;
   const Eigen::Index n = V.rows();
 
   const AtlasMapResult right = square_map_from_atlas(V, cortex, reg, atlas);
@@ -140,14 +155,9 @@ TEST(AtlasMap, RegistrationWithoutTheSphereRegUndoesMostOfAKnownRotation) {
   const MatrixXi atlas_cortex = cortex_from_flat_vertices(d);
   const AtlasSquare atlas = atlas_square_map(d.white.mesh.V, d.sphere.mesh.V, atlas_cortex);
 
-  const MatrixXd S = normalize_to_unit_sphere(d.sphere.mesh.V, "sphere");
-  const Eigen::Matrix3d R = Eigen::AngleAxisd(12.0 * M_PI / 180.0, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
-  const MatrixXd reg = S * R.transpose();
-  const MatrixXd V = interpolate_on_sphere(SpherePointLocator(S, d.white.mesh.F), d.white.mesh.V, reg);
-  std::vector<char> inside;
-  interpolate_on_sphere(SpherePointLocator(S, atlas_cortex), S, reg, &inside);
-  const MatrixXi cortex = region_faces_from_vertices(V, d.white.mesh.F, std::vector<bool>(inside.begin(), inside.end())).F;
-  const MatrixXd truth = interpolate_on_sphere(SpherePointLocator(atlas.S, atlas.map.F), atlas.map.UV, reg);
+  const RotatedSubject sub = rotated_subject(d, atlas_cortex, atlas);
+  const MatrixXd &V = sub.V, &truth = sub.truth;
+  const MatrixXi& cortex = sub.cortex;
   const Eigen::Index n = V.rows();
 
   const SquareMapResult own = square_map(V, cortex, {});

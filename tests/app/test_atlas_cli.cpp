@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -131,6 +132,41 @@ TEST(AtlasCli, FlattenInRegistrationModeRecordsTheModeAndNormativeRefusesAtlasMo
       << out;
   EXPECT_NE(out.find("the element correspondence is 'atlas " + mode.substr(13) + "' but"), std::string::npos) << out;
   EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+}
+
+// `run --atlas` for a subject without a sphere.reg: the maps are registered to the atlas's (mode
+// "registration", both atlas hemispheres' identities), the run says so before it starts and in its
+// warnings, and the maps are authalic.
+TEST(AtlasCli, RunWithTheAtlasButNoSphereRegRegistersTheMapsAndSaysSo) {
+  AUTHALIC_REQUIRE_SHARED(fs5, "fsaverage5/white_left.gii.gz");
+  const std::string dir = test::temp_dir("registration_run");
+  const std::string exe = test::authalic_binary();
+  const std::string shared = std::filesystem::path(fs5).parent_path().parent_path().string();
+  std::string out;
+  ASSERT_EQ(test::run_command(exe + " phantom " + dir + "/ph --anatomical-variability --controls 1 --patients 0 --seed 3 --shared " +
+                                  shared + " --quiet",
+                              &out),
+            0)
+      << out;
+  const std::string subject = dir + "/ph/sub-control01";
+  ASSERT_TRUE(std::filesystem::remove(subject + "/surf/lh.sphere.reg"));
+  ASSERT_EQ(test::run_command(exe + " run --subjects-dir " + dir + "/ph --subject sub-control01 --atlas " + dir + "/ph/atlas --pet " +
+                                  subject + "/sub-control01_pet.nii.gz --out " + dir + "/out --no-report",
+                              &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("lh.sphere.reg is missing: element correspondence by registration to the atlas map"), std::string::npos) << out;
+  EXPECT_NE(out.find("mode 'registration'"), std::string::npos) << out;
+  const std::string base = dir + "/out/sub-subcontrol01/sub-subcontrol01";
+  const nlohmann::json elements = nlohmann::json::parse(std::ifstream(base + "_elements.json"));
+  const std::string mode = elements["metadata"]["correspondence"];
+  EXPECT_EQ(mode.rfind("registration ", 0), 0u) << mode;
+  EXPECT_EQ(mode.size(), 13u + 16u + 1u + 16u) << mode;  // "registration " + left id + "+" + right id
+  for (const char* h : {"L", "R"}) {
+    const nlohmann::json flat = nlohmann::json::parse(std::ifstream(base + "_hemi-" + h + "_space-authalic_flat.json"));
+    EXPECT_LE(flat["metrics"]["element_area_cv"].get<double>(), 0.005) << h;
+    EXPECT_EQ(flat["metrics"]["flips"], 0) << h;
+  }
 }
 
 }  // namespace
