@@ -586,7 +586,7 @@ void setup(CLI::App& parent) {
                   "Grid cells per side (grid method); default: with the stretch start 256 for regions up to 131,072 "
                   "triangles and 512 above, else 512")
       ->check(CLI::IsMember({0}) | in_range(16, 4096));
-  sub->add_option("--passes", a->passes, "Maximum flow passes (grid method)")->check(in_range(0, 100))->capture_default_str();
+  sub->add_option("--passes", a->passes, "Maximum flow passes (grid method; at least 6 from a --sphere-reg start, which is far from authalic)")->check(in_range(0, 100))->capture_default_str();
   sub->add_option("--iterations", a->iterations, "Maximum steps (mesh method)")->check(in_range(0, 100000))->capture_default_str();
   sub->add_option("--mesh-targets", a->mesh_targets,
                   "Mesh method: target vertex areas from the surface's own triangles (surface, what the outputs are "

@@ -26,9 +26,10 @@ PY=/usr/bin/python3
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 CONTROLS=${CONTROLS:-20}
+SEED=${SEED:-1}  # another phantom draw: SEED=2 bench/bench_correspondence.sh
 
 t0=$(date +%s)
-"$AUTHALIC" phantom "$WORK/ph" --anatomical-variability --controls "$CONTROLS" --patients 2 --seed 1 --shared "$SHARED" -q
+"$AUTHALIC" phantom "$WORK/ph" --anatomical-variability --controls "$CONTROLS" --patients 2 --seed "$SEED" --shared "$SHARED" -q
 t1=$(date +%s)
 "$AUTHALIC" group "$WORK/ph/cohort.csv" "$WORK/own" --jobs 2 --k 32 --force -q >/dev/null || echo "per-subject group: exit $?"
 t2=$(date +%s)
@@ -43,7 +44,7 @@ w = csv.DictWriter(open(sys.argv[2], "w", newline=""), fieldnames=keep, extrasac
 w.writeheader(); w.writerows(rows)' "$WORK/ph/cohort.csv" "$WORK/ph/cohort_noreg.csv"
 "$AUTHALIC" group "$WORK/ph/cohort_noreg.csv" "$WORK/reg" --jobs 2 --k 32 --force -q --atlas "$WORK/ph/atlas" >/dev/null || echo "registration group: exit $?"
 t4=$(date +%s)
-echo "phantom $((t1 - t0)) s; group per-subject $((t2 - t1)) s; group atlas $((t3 - t2)) s; group registration $((t4 - t3)) s"
+echo "phantom (seed $SEED) $((t1 - t0)) s; group per-subject $((t2 - t1)) s; group atlas $((t3 - t2)) s; group registration $((t4 - t3)) s"
 
 AUTHALIC="$AUTHALIC" PH="$WORK/ph" OWN="$WORK/own" ATL="$WORK/atl" REG="$WORK/reg" VAL="$WORK/val" $PY - <<'PYEOF'
 import csv, json, os, subprocess

@@ -112,7 +112,8 @@ struct AtlasMapResult {
   AtlasTransfer transfer;
   Displacement displacement;  // of the flow from the transferred atlas position, in elements (K = k)
 };
-// The subject's map in atlas correspondence: transfer_atlas_map, then square_map from that start.
+// The subject's map in atlas correspondence: transfer_atlas_map, then square_map from that start
+// (with at least 6 grid passes: the transferred start is far from authalic).
 // V #V x 3 (mm), F the subject's cortex faces, sphere_reg #V x 3 (any radius: normalised).
 AtlasMapResult square_map_from_atlas(const MatrixXd& V, const MatrixXi& F, const MatrixXd& sphere_reg, const AtlasSquare& atlas,
                                      SquareMapOptions options = {}, int k = 32, const ProgressFn& progress = {});
