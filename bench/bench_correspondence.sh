@@ -15,6 +15,8 @@
 #    a reference of the other 19) of the share of elements at |z| >= 2, beside what the t distribution
 #    predicts for that reference (z = (x - mean) / (SD sqrt(1 + 1/n)) ~ t with n - 1 df; required
 #    within 1.5 percentage points).
+#  - registration mode on the native real subject (fs741 lh.white against fsaverage5): CPU, peak
+#    memory, depth alignment and distortion, beside its per-subject map.
 #   bench/bench_correspondence.sh [AUTHALIC]   (needs ../shared/data and /usr/bin/python3 with nibabel, scipy)
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
@@ -155,3 +157,38 @@ for name, d in (("atlas", atl), ("registration", reg)):
     map_acceptance(name, d)
     normative_validation(name, d)
 PYEOF
+
+# Registration mode on the native-resolution real subject (fs741 lh.white, no sphere.reg) against
+# fsaverage5, one thread: CPU, peak memory, the depth alignment and the map's distortion, beside the
+# same surface mapped per subject.
+FS741="$SHARED/fs741"
+FS5="$SHARED/fsaverage5"
+ATLAS5=(--atlas-surface "$FS5/white_left.gii.gz" --atlas-sphere "$FS5/sphere_left.gii.gz" --atlas-faces-from "$FS5/flat_left.gii.gz")
+for mode in per-subject registration; do
+  extra=()
+  [ "$mode" = registration ] && extra=(--register "${ATLAS5[@]}")
+  set +e
+  /usr/bin/time -f "%U %S %M" -o "$WORK/fs741.$mode.t" "$AUTHALIC" flatten "$FS741/lh.white.surf.gii" "$WORK/fs741.$mode.surf.gii" \
+    --label "$FS741/lh.cortex.label" --threads 1 --json -q "${extra[@]}" >"$WORK/fs741.$mode.json"
+  code=$?
+  set -e
+  MODE=$mode CODE=$code T="$WORK/fs741.$mode.t" J="$WORK/fs741.$mode.json" $PY - <<'PYEOF'
+import json, os
+user, sys_, rss = open(os.environ["T"]).read().split()[-3:]
+if os.environ["CODE"] != "0":
+    print(f"fs741 lh.white {os.environ['MODE']}: exit {os.environ['CODE']} (FAIL)")
+    raise SystemExit
+j = json.load(open(os.environ["J"]))
+m, c = j["metrics"], j["correspondence"]
+line = (f"fs741 lh.white ({m['vertices']} vertices) {os.environ['MODE']:12s}: {float(user) + float(sys_):.1f} s CPU, "
+        f"{int(rss) / 1024:.0f} MB peak; element CV {m['element_cv']:.4f}, per-face mean |ln area ratio| "
+        f"{m['face_ln_area_abs']['mean']:.4f}, per-vertex {m['vertex_ln_area_abs']['mean']:.4f}, flips {m['flips']}")
+if "depth_correlation_before" in c:
+    line += (f"; depth correlation with the atlas {c['depth_correlation_before']:.2f} -> {c['depth_correlation_after']:.2f} "
+             f"in {c['registration_iterations']} steps, vertices moved median "
+             f"{c['registration_displacement_elements']['median']:.2f} elements; flow afterwards median "
+             f"{c['flow_displacement_elements']['median']:.3f}")
+    line += "   [authalic: " + ("PASS" if m["element_cv"] <= 0.005 and m["flips"] == 0 else "FAIL") + "]"
+print(line)
+PYEOF
+done

@@ -166,10 +166,10 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   if (opt.anatomical_anchor) R.anterior_vertex = anterior_boundary_anchor(V, F, b);
   const bool given_start = opt.start_uv.rows() > 0;
   if (given_start) {
-    b.boundary_perimeter = boundary_perimeter_from_map(opt.start_uv, V, F, opt.width, opt.start_min_boundary_step);
     if (opt.start_uv.rows() != V.rows() || opt.start_uv.cols() != 2)
       throw InputError("start map: " + std::to_string(opt.start_uv.rows()) + " rows for " + std::to_string(V.rows()) +
                        " vertices; give one 2D position per surface vertex");
+    b.boundary_perimeter = boundary_perimeter_from_map(opt.start_uv, V, F, opt.width, opt.start_min_boundary_step);
     b.try_cotangent = false;  // the interior is replaced by the given start
     b.fallback = HarmonicWeights::ClampedCotangent;
   }

@@ -7,9 +7,11 @@
 #include <omp.h>
 
 #include <cmath>
+#include <string>
 
 #include "common/hard_meshes.h"
 #include "core/authalic_flow.h"
+#include "core/error.h"
 #include "core/metrics.h"
 #include "core/square_map.h"
 
@@ -64,6 +66,19 @@ TEST(SquareMap, FlatSquareStaysTheIdentity) {
   EXPECT_TRUE(r.flow.converged);
   EXPECT_EQ(r.flow.iterations, 0);  // already area-preserving: the flow does not move it
   EXPECT_EQ(r.flips, 0);
+}
+
+// A starting map with too few rows is refused before any of it is read.
+TEST(SquareMap, StartMapOfTheWrongSizeIsAnInputError) {
+  const TriMesh m = test::square_grid(12);
+  SquareMapOptions o = test_options();
+  o.start_uv = m.V.topRows(m.V.rows() / 2).leftCols(2);
+  try {
+    square_map(m.V, m.F, o);
+    FAIL() << "a start map with half the rows was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("start map: " + std::to_string(m.V.rows() / 2) + " rows for " + std::to_string(m.V.rows())), std::string::npos) << e.what();
+  }
 }
 
 TEST(SquareMap, NonUniformPlanarDiskEndsWithEqualVertexAreas) {
