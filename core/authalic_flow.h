@@ -27,7 +27,8 @@
 //    connectivity (face_area_newton_displacement), kept only while they lower the per-face error
 //    without flipping; for the sub-cell errors a grid cannot see (native meshes). Then local
 //    steps about the faces still beyond polish.far_band, judged on their own error (a few faces
-//    far off, e.g. at a corner where the Neumann field vanishes, never move the global error).
+//    far off, e.g. at a corner where the Neumann field vanishes, never move the global error),
+//    on the log residual (an ear crushed against a side: fsaverage5 variants, docs/maps.md).
 // Measure control (DLF section 5.5): an optional per-vertex density multiplies the surface area
 // element, so a region of density 2 receives twice its natural share of the domain.
 #include <functional>
@@ -176,10 +177,14 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
 // (Jᵀ J + μ diag) δ = −Jᵀ r with μ = 1e-3 (Marquardt's scaling). Only vertices in `free_vertex`
 // move; side vertices only along their side, corners not at all.
 // Inputs: UV #V x 2 map, F #F x 3 faces, face_target #F target areas (summing to the domain's),
-// side_mask #V, free_vertex #V (0/1), cg_iterations: conjugate-gradient budget. Output #V x 2 δ.
+// side_mask #V, free_vertex #V (0/1), cg_iterations: conjugate-gradient budget,
+// residual: Area, (a_f − T_f)/√T_f as above, or LogArea, √T_f ln(a_f / T_f): the same to first
+// order near the targets, but a crushed face costs its log, not at most T_f (the far-face steps).
+// Output #V x 2 δ.
+enum class FaceAreaResidual { Area, LogArea };
 MatrixXd face_area_newton_displacement(const MatrixXd& UV, const MatrixXi& F, const VectorXd& face_target,
                                        const VectorXi& side_mask, const std::vector<char>& free_vertex,
-                                       int cg_iterations = 50);
+                                       int cg_iterations = 50, FaceAreaResidual residual = FaceAreaResidual::Area);
 
 // Per-vertex flip-preventing steps (the polishes' and the flow's): each vertex takes theta x the
 // smallest critical step of its triangles (capped at 1); triangles that would still fall to or
