@@ -3,6 +3,7 @@
 #include <Eigen/CholmodSupport>
 #include <algorithm>
 #include <limits>
+#include <mutex>
 #include <Eigen/SparseCholesky>
 
 namespace authalic {
@@ -49,7 +50,16 @@ bool SpdSolver::compute(const SparseMatrix& A) {
     impl_->cholmod.cholmod().nmethods = 1;
     impl_->cholmod.cholmod().method[0].ordering = CHOLMOD_METIS;
     impl_->cholmod.cholmod().print = 0;  // quiet: a non-definite matrix falls back below
-    impl_->cholmod.compute(A);
+    {
+      // METIS keeps its random generator in process-global state: two orderings at once (the
+      // two hemispheres' maps, made side by side by `run`) draw from one sequence and came out
+      // different from run to run. One ordering at a time keeps every map independent of what
+      // else the process does.
+      static std::mutex metis_mutex;
+      const std::lock_guard<std::mutex> lock(metis_mutex);
+      impl_->cholmod.analyzePattern(A);
+    }
+    impl_->cholmod.factorize(A);
     impl_->use_fallback = impl_->cholmod.info() != Eigen::Success;
   }
   if (impl_->use_fallback) impl_->fallback.compute(A);

@@ -8,6 +8,8 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <thread>
 
 #include "common/test_data.h"
@@ -90,4 +92,31 @@ TEST(RunSafety, RefusesToOverwriteWithoutForceAndBadInputWritesNothing) {
   EXPECT_EQ(authalic::test::run_command(cmd, &log), 2);
   EXPECT_NE(log.find("missing.nii.gz"), std::string::npos) << log;
   EXPECT_EQ(std::distance(fs::directory_iterator(out2), fs::directory_iterator()), 0) << "nothing may be written";
+}
+
+TEST(RunSafety, SameMapsAndElementsForOneAndTwoThreads) {
+  // `run` makes the two hemispheres' maps side by side (one thread each) when it has two threads
+  // and one after the other with one: every map, element table and image has the same bytes.
+  std::string dirs[2], log;
+  for (int t = 0; t < 2; ++t) {
+    dirs[t] = authalic::test::temp_dir("run-threads-" + std::to_string(t + 1));
+    std::string cmd;
+    for (const auto& a : run_args(dirs[t])) cmd += "'" + a + "' ";
+    ASSERT_EQ(authalic::test::run_command(cmd + "--threads " + std::to_string(t + 1), &log), 0) << log;
+  }
+  const fs::path sub = "sub-patient01";
+  int compared = 0;
+  for (const auto& e : fs::directory_iterator(fs::path(dirs[0]) / sub)) {
+    const std::string name = e.path().filename().string();
+    auto ends = [&](const std::string& x) { return name.size() >= x.size() && name.compare(name.size() - x.size(), x.size(), x) == 0; };
+    const bool data = ends(".gii") || ends(".tsv") || ends(".nii.gz");
+    if (!data) continue;
+    std::ifstream a(e.path(), std::ios::binary), b(fs::path(dirs[1]) / sub / name, std::ios::binary);
+    ASSERT_TRUE(b.good()) << name;
+    const std::string sa((std::istreambuf_iterator<char>(a)), std::istreambuf_iterator<char>());
+    const std::string sb((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
+    EXPECT_TRUE(sa == sb) << name << " differs between --threads 1 and --threads 2";
+    ++compared;
+  }
+  EXPECT_GE(compared, 10);
 }

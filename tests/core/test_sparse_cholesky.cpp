@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
+#include <thread>
 #include <vector>
 
 #include "core/sparse_cholesky.h"
@@ -24,6 +26,29 @@ SparseMatrix path_laplacian(int n, double s, double shift) {
 }
 
 double residual(const SparseMatrix& A, const MatrixXd& x, const MatrixXd& b) { return (A * x - b).norm() / b.norm(); }
+
+// 2D grid Laplacian (n x n unknowns, 5-point) plus a diagonal shift, with irregular weights so
+// that the ordering changes the rounding of the solution.
+SparseMatrix grid_laplacian(int n) {
+  std::vector<Eigen::Triplet<double>> t;
+  auto id = [n](int i, int j) { return j * n + i; };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      double diag = 1e-3;
+      for (const auto& [di, dj] : {std::pair{1, 0}, std::pair{0, 1}}) {
+        if (i + di >= n || j + dj >= n) continue;
+        const double w = 1.0 + 0.5 * std::sin(0.37 * i + 0.91 * j + di);
+        t.emplace_back(id(i, j), id(i + di, j + dj), -w);
+        t.emplace_back(id(i + di, j + dj), id(i, j), -w);
+        t.emplace_back(id(i + di, j + dj), id(i + di, j + dj), w);
+        diag += w;
+      }
+      t.emplace_back(id(i, j), id(i, j), diag);
+    }
+  SparseMatrix A(n * n, n * n);
+  A.setFromTriplets(t.begin(), t.end());
+  return A;
+}
 
 }  // namespace
 
@@ -80,4 +105,21 @@ TEST(LevenbergMarquardt, MatrixFreeStepMatchesTheDenseNormalEquations) {
   EXPECT_GT((short_step - exact).norm() / exact.norm(), 1e-3);
   // A zero residual asks for no move.
   EXPECT_EQ(levenberg_marquardt_step(J, VectorXd::Zero(60), 50).norm(), 0.0);
+}
+
+TEST(SpdSolver, TwoSolversAtOnceGiveTheBitsOfOne) {
+  // `run` maps both hemispheres side by side. Above 100,000 unknowns the solver orders with METIS,
+  // whose random generator is process-global: two analyses at once drew from one sequence and gave
+  // orderings (and solution bits, and maps: fs741, up to 0.05 mm) that changed from run to run.
+  const SparseMatrix A = grid_laplacian(330);  // 108,900 unknowns: the CHOLMOD path
+  const MatrixXd b = MatrixXd::Ones(A.rows(), 1);
+  const MatrixXd alone = SpdSolver(A).solve(b);
+  ASSERT_LT(residual(A, alone, b), 1e-10);
+  for (int round = 0; round < 3; ++round) {
+    MatrixXd x[2];
+    std::thread other([&] { x[1] = SpdSolver(A).solve(b); });
+    x[0] = SpdSolver(A).solve(b);
+    other.join();
+    for (const MatrixXd& xi : x) EXPECT_EQ((xi - alone).cwiseAbs().maxCoeff(), 0.0) << "round " << round;
+  }
 }
