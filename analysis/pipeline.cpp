@@ -65,24 +65,15 @@ class StepLog {
     report(progress_, "run", -1, name + " ...");
   }
   void end(RunSummary& summary) {
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    summary.step_seconds.emplace_back(name_, s);
-    std::ostringstream line;
-    line << std::left << std::setw(44) << name_ << std::right << std::fixed << std::setprecision(3) << s << " s";
-    lines_.push_back(line.str());
-    for (const auto& n : notes_) lines_.push_back("  " + n);
-    notes_.clear();
+    add(name_, std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(), summary);
     report(progress_, "run", -1, name_ + " done");
   }
   // A remark about the current step, printed under its timing line.
   void note(const std::string& line) { notes_.push_back(line); }
   // A step timed elsewhere (one of two run side by side): its line and its remark.
   void timed(const std::string& name, double seconds, const std::string& remark, RunSummary& summary) {
-    summary.step_seconds.emplace_back(name, seconds);
-    std::ostringstream line;
-    line << std::left << std::setw(44) << name << std::right << std::fixed << std::setprecision(3) << seconds << " s";
-    lines_.push_back(line.str());
-    lines_.push_back("  " + remark);
+    note(remark);
+    add(name, seconds, summary);
   }
   std::string text() const {
     std::string t;
@@ -91,6 +82,16 @@ class StepLog {
   }
 
  private:
+  // The step's timing line, then the notes taken since the last one.
+  void add(const std::string& name, double seconds, RunSummary& summary) {
+    summary.step_seconds.emplace_back(name, seconds);
+    std::ostringstream line;
+    line << std::left << std::setw(44) << name << std::right << std::fixed << std::setprecision(3) << seconds << " s";
+    lines_.push_back(line.str());
+    for (const auto& n : notes_) lines_.push_back("  " + n);
+    notes_.clear();
+  }
+
   ProgressFn progress_;
   std::string name_;
   std::chrono::steady_clock::time_point start_;
