@@ -1,5 +1,7 @@
 #include "core/sparse_cholesky.h"
 
+#include <dlfcn.h>
+
 #include <Eigen/CholmodSupport>
 #include <algorithm>
 #include <limits>
@@ -9,7 +11,7 @@
 namespace authalic {
 
 struct SpdSolver::Impl {
-  Eigen::CholmodSimplicialLLT<SparseMatrix> cholmod;
+  Eigen::CholmodDecomposition<SparseMatrix> cholmod;
   Eigen::SimplicialLDLT<SparseMatrix> fallback;
   bool use_fallback = false;
   bool ok = false;
@@ -23,6 +25,21 @@ SpdSolver::SpdSolver(SpdSolver&&) noexcept = default;
 SpdSolver& SpdSolver::operator=(SpdSolver&&) noexcept = default;
 
 namespace {
+constexpr Eigen::Index kLdltMaxUnknowns = 100000;
+constexpr Eigen::Index kSupernodalMinUnknowns = 250000;
+
+// BLAS in one thread: a threaded OpenBLAS (the pthread or OpenMP build, if that is the machine's
+// libblas) may block a factorisation differently for another thread count, and maps must not
+// depend on it (README: deterministic). The serial build, which scripts/install_deps.sh
+// installs, has no threads to set; reference BLAS has no such function.
+void single_threaded_blas() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    using SetThreads = void (*)(int);
+    if (void* f = ::dlsym(RTLD_DEFAULT, "openblas_set_num_threads")) reinterpret_cast<SetThreads>(f)(1);
+  });
+}
+
 bool same_pattern(const SparseMatrix& A, const std::vector<SparseMatrix::StorageIndex>& outer,
                   const std::vector<SparseMatrix::StorageIndex>& inner) {
   return A.isCompressed() && static_cast<std::size_t>(A.outerSize() + 1) == outer.size() &&
@@ -39,14 +56,17 @@ bool SpdSolver::compute(const SparseMatrix& A) {
     impl_->outer.clear();
     impl_->inner.clear();
   }
-  // Measured on fsaverage5 (2 cores, reference BLAS): Eigen's simplicial LDLT is as fast or faster
-  // up to ~100k unknowns (the flow's local systems, benchmark B1's initial map); CHOLMOD with METIS wins on
-  // the largest (benchmark B3's 150k-vertex initial map: 3.2 s vs 3.5 s). Simplicial, not supernodal: on a
-  // 158k-vertex native pial region (lnz 4.8M) a numeric refactorisation takes 0.85 s against 1.15 s
-  // through reference BLAS's dense kernels, and no BLAS means no BLAS-dependent rounding. METIS
-  // only: CHOLMOD's default also tries AMD first, which costs more than it saves on surface meshes.
-  impl_->use_fallback = A.rows() <= 100000;
+  // Measured on fsaverage5 (2 cores): Eigen's simplicial LDLT is as fast or faster up to ~100k
+  // unknowns (the flow's local systems, benchmark B1's initial map); CHOLMOD with METIS wins above.
+  // METIS only: CHOLMOD's default also tries AMD first, which costs more than it saves on surface
+  // meshes (B3's 149k unknowns: AMD's analysis 0.08 s against 0.7 s, but lnz 9.4M against 6.6M
+  // and a factorisation of 1.3 s against 0.5 s). Supernodal above 250k unknowns, where OpenBLAS's
+  // dense kernels pay: S655's 585k unknowns (lnz 32M) refactorise in 2.9 s against 7.3 s
+  // simplicial; at 149k both take 0.5 s, and below simplicial needs no BLAS at all.
+  impl_->use_fallback = A.rows() <= kLdltMaxUnknowns;
+  impl_->cholmod.setMode(A.rows() > kSupernodalMinUnknowns ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
   if (!impl_->use_fallback) {
+    single_threaded_blas();
     impl_->cholmod.cholmod().nmethods = 1;
     impl_->cholmod.cholmod().method[0].ordering = CHOLMOD_METIS;
     impl_->cholmod.cholmod().print = 0;  // quiet: a non-definite matrix falls back below
@@ -85,6 +105,46 @@ bool SpdSolver::ok() const { return impl_->ok; }
 MatrixXd SpdSolver::solve(const MatrixXd& B) const {
   if (impl_->use_fallback) return impl_->fallback.solve(B);
   return impl_->cholmod.solve(B);
+}
+
+bool SpdSolver::solve_preconditioned(const SparseMatrix& A, const MatrixXd& B, MatrixXd& X, double tolerance,
+                                     int max_iterations, int* iterations) const {
+  // Preconditioned CG (Saad, Iterative Methods, Algorithm 9.1) on all columns at once: one
+  // preconditioner application per iteration serves every column; each column keeps its own
+  // step lengths and stops moving once converged.
+  if (iterations) *iterations = 0;
+  if (!impl_->ok || A.rows() != B.rows() || X.rows() != B.rows() || X.cols() != B.cols()) return false;
+  const Eigen::Index nc = B.cols();
+  MatrixXd R = B - A.selfadjointView<Eigen::Lower>() * X;
+  const Eigen::ArrayXd r0_norm = R.colwise().norm().transpose().array();
+  std::vector<char> done(static_cast<std::size_t>(nc), 0);
+  auto converged = [&](Eigen::Index c) { return R.col(c).norm() <= tolerance * r0_norm[c]; };
+  bool all = true;
+  for (Eigen::Index c = 0; c < nc; ++c) all = all && (done[static_cast<std::size_t>(c)] = converged(c));
+  if (all) return true;
+  MatrixXd Z = solve(R), P = Z, AP(B.rows(), nc);
+  Eigen::ArrayXd rz = (R.array() * Z.array()).colwise().sum().transpose();
+  for (int it = 1; it <= max_iterations; ++it) {
+    AP.noalias() = A.selfadjointView<Eigen::Lower>() * P;
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      if (done[static_cast<std::size_t>(c)]) continue;
+      const double alpha = rz[c] / P.col(c).dot(AP.col(c));
+      X.col(c) += alpha * P.col(c);
+      R.col(c) -= alpha * AP.col(c);
+    }
+    all = true;
+    for (Eigen::Index c = 0; c < nc; ++c) all = all && (done[static_cast<std::size_t>(c)] = done[static_cast<std::size_t>(c)] || converged(c));
+    if (iterations) *iterations = it;
+    if (all) return true;
+    Z = solve(R);
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      if (done[static_cast<std::size_t>(c)]) continue;
+      const double rz_new = R.col(c).dot(Z.col(c));
+      P.col(c) = Z.col(c) + (rz_new / rz[c]) * P.col(c);
+      rz[c] = rz_new;
+    }
+  }
+  return false;
 }
 
 VectorXd levenberg_marquardt_step(const SparseMatrix& J, const VectorXd& r, int cg_iterations) {

@@ -25,6 +25,14 @@ class SpdSolver {
   bool refactor(const SparseMatrix& A);
   bool ok() const;
   MatrixXd solve(const MatrixXd& B) const;
+  // Solves A X = B by conjugate gradients, column by column, preconditioned with this solver's
+  // factorisation of a nearby matrix of A's pattern (so a sequence of slowly changing systems,
+  // like the stretch-energy iterations, needs one factorisation instead of one per system). X
+  // holds the starting guess on entry. True, with X the solution, when every column's residual
+  // has fallen to `tolerance` times its starting guess's within `max_iterations`; false leaves X
+  // unspecified.
+  bool solve_preconditioned(const SparseMatrix& A, const MatrixXd& B, MatrixXd& X, double tolerance, int max_iterations,
+                            int* iterations = nullptr) const;
 
  private:
   struct Impl;

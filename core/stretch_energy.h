@@ -29,6 +29,16 @@ struct StretchEnergyOptions {
   // Slide the boundary along the sides by a Moser pass of each iterate (grid of this resolution).
   bool moser_boundary = true;
   int boundary_grid = 256;
+  // Steps after the first: conjugate gradients preconditioned with the last factorisation,
+  // cutting the residual of the current map by this factor in at most inexact_max_iterations
+  // (else a refactorisation), and a refactorisation at the next step after a solve that needed
+  // more than inexact_refactor_after; tolerance 0: every step exact.
+  // Only systems of more than inexact_min_unknowns: below, a factorisation costs about as much as
+  // the CG steps (Eigen's LDLT, 10k unknowns: 10 ms), so every step is exact there.
+  double inexact_tolerance = 1e-3;
+  int inexact_max_iterations = 20;
+  int inexact_refactor_after = 10;
+  int inexact_min_unknowns = 100000;
 };
 
 struct StretchEnergyReport {

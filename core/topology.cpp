@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numeric>
 #include <queue>
 #include <sstream>
@@ -18,61 +19,80 @@ namespace authalic {
 
 namespace {
 
-std::int64_t key(int a, int b, int n) { return static_cast<std::int64_t>(a) * n + b; }
+// Items bucketed by a vertex with a counting sort (O(n + m); a comparison sort of the 3F
+// half-edges with binary searches into it was most of the topology checks' time on 150k-vertex
+// meshes), each bucket then sorted: together, the order of sorting (vertex, item).
+template <class Item>
+struct VertexBuckets {
+  std::vector<int> start;  // n + 1 offsets into items
+  std::vector<Item> items;
 
-// Directed half-edges (from, to) of all faces, with their id 3f+c, sorted by (from, to, id).
-struct DirectedEdges {
-  std::vector<std::int64_t> keys;  // sorted keys
-  std::vector<int> ids;            // half-edge id for each key
+  template <class VertexOf>
+  VertexBuckets(int n, std::vector<Item> unsorted, VertexOf vertex_of) : start(static_cast<std::size_t>(n) + 1, 0) {
+    for (const Item& x : unsorted) ++start[static_cast<std::size_t>(vertex_of(x)) + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    items.resize(unsorted.size());
+    for (const Item& x : unsorted) items[static_cast<std::size_t>(fill[static_cast<std::size_t>(vertex_of(x))]++)] = x;
+    for (int v = 0; v < n; ++v) std::sort(items.begin() + start[v], items.begin() + start[v + 1]);
+  }
 };
 
-DirectedEdges directed_edges(const MatrixXi& F, int n) {
-  std::vector<std::pair<std::int64_t, int>> he;
-  he.reserve(static_cast<std::size_t>(F.rows()) * 3);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) he.emplace_back(key(F(f, c), F(f, (c + 1) % 3), n), static_cast<int>(3 * f + c));
-  std::sort(he.begin(), he.end());
-  DirectedEdges d;
-  d.keys.reserve(he.size());
-  d.ids.reserve(he.size());
-  for (const auto& [k, id] : he) {
-    d.keys.push_back(k);
-    d.ids.push_back(id);
-  }
-  return d;
-}
+// Directed half-edges from each vertex: (to, id) with id 3f+c, sorted by (from, to, id).
+struct DirectedEdges {
+  VertexBuckets<std::pair<int, int>> from;
 
-// Number of half-edges from a to b.
-std::pair<std::size_t, std::size_t> range_of(const DirectedEdges& d, std::int64_t k) {
-  auto lo = std::lower_bound(d.keys.begin(), d.keys.end(), k);
-  auto hi = std::upper_bound(lo, d.keys.end(), k);
-  return {static_cast<std::size_t>(lo - d.keys.begin()), static_cast<std::size_t>(hi - d.keys.begin())};
+  DirectedEdges(const MatrixXi& F, int n) : from(n, entries(F), [&](const std::pair<int, int>& e) { return F(e.second / 3, e.second % 3); }) {}
+
+  static std::vector<std::pair<int, int>> entries(const MatrixXi& F) {
+    std::vector<std::pair<int, int>> he;
+    he.reserve(static_cast<std::size_t>(F.rows()) * 3);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) he.emplace_back(F(f, (c + 1) % 3), static_cast<int>(3 * f + c));
+    return he;
+  }
+  int id(std::size_t i) const { return from.items[i].second; }
+};
+
+DirectedEdges directed_edges(const MatrixXi& F, int n) { return DirectedEdges(F, n); }
+
+// The entries [lo, hi) of the half-edges from a to b.
+std::pair<std::size_t, std::size_t> range_of(const DirectedEdges& d, int a, int b) {
+  const auto begin = d.from.items.begin() + d.from.start[a], end = d.from.items.begin() + d.from.start[a + 1];
+  const auto lo = std::lower_bound(begin, end, std::pair<int, int>{b, std::numeric_limits<int>::min()});
+  auto hi = lo;
+  while (hi != end && hi->first == b) ++hi;
+  return {static_cast<std::size_t>(lo - d.from.items.begin()), static_cast<std::size_t>(hi - d.from.items.begin())};
 }
 
 }  // namespace
 
 EdgeTopology edge_topology(const MatrixXi& F, int num_vertices) {
-  const int n = num_vertices;
-  std::vector<std::tuple<std::int64_t, int, int>> he;  // (undirected key, face, corner opposite)
-  he.reserve(static_cast<std::size_t>(F.rows()) * 3);
+  // Undirected half-edges (other end, face, corner opposite) bucketed by their smaller end: edges
+  // come out ordered by (smaller end, larger end), each with its faces in order.
+  using HalfEdge = std::array<int, 4>;  // smaller end, larger end, face, corner
+  std::vector<HalfEdge> unsorted;
+  unsorted.reserve(static_cast<std::size_t>(F.rows()) * 3);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int c = 0; c < 3; ++c) {
       const int a = F(f, (c + 1) % 3), b = F(f, (c + 2) % 3);
-      he.emplace_back(key(std::min(a, b), std::max(a, b), n), static_cast<int>(f), c);
+      unsorted.push_back({std::min(a, b), std::max(a, b), static_cast<int>(f), c});
     }
-  std::sort(he.begin(), he.end());
+  const VertexBuckets<HalfEdge> he(num_vertices, std::move(unsorted), [](const HalfEdge& h) { return h[0]; });
   EdgeTopology t;
   t.FE.resize(F.rows(), 3);
   std::vector<std::pair<int, int>> edges;
-  for (std::size_t i = 0; i < he.size();) {
+  edges.reserve(he.items.size() / 2 + 1);
+  t.edge_faces.reserve(he.items.size() / 2 + 1);
+  for (std::size_t i = 0; i < he.items.size();) {
     std::size_t j = i;
-    const auto k = std::get<0>(he[i]);
+    const int a = he.items[i][0], b = he.items[i][1];
     const int e = static_cast<int>(edges.size());
-    edges.emplace_back(static_cast<int>(k / n), static_cast<int>(k % n));
+    edges.emplace_back(a, b);
     t.edge_faces.emplace_back();
-    for (; j < he.size() && std::get<0>(he[j]) == k; ++j) {
-      t.edge_faces.back().push_back(std::get<1>(he[j]));
-      t.FE(std::get<1>(he[j]), std::get<2>(he[j])) = e;
+    for (; j < he.items.size() && he.items[j][0] == a && he.items[j][1] == b; ++j) {
+      t.edge_faces.back().push_back(he.items[j][2]);
+      t.FE(he.items[j][2], he.items[j][3]) = e;
     }
     i = j;
   }
@@ -90,9 +110,9 @@ VectorXi halfedge_twins(const MatrixXi& F, int num_vertices) {
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int c = 0; c < 3; ++c) {
       const int a = F(f, c), b = F(f, (c + 1) % 3);
-      const auto [lo, hi] = range_of(d, key(b, a, num_vertices));
-      const auto [slo, shi] = range_of(d, key(a, b, num_vertices));
-      if (hi - lo == 1 && shi - slo == 1) twin[3 * f + c] = d.ids[lo];  // exactly one face each way
+      const auto [lo, hi] = range_of(d, b, a);
+      const auto [slo, shi] = range_of(d, a, b);
+      if (hi - lo == 1 && shi - slo == 1) twin[3 * f + c] = d.id(lo);  // exactly one face each way
     }
   return twin;
 }
@@ -119,7 +139,7 @@ std::vector<std::vector<int>> boundary_loops(const MatrixXi& F, int num_vertices
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int c = 0; c < 3; ++c) {
       const int a = F(f, c), b = F(f, (c + 1) % 3);
-      const auto [lo, hi] = range_of(d, key(b, a, num_vertices));
+      const auto [lo, hi] = range_of(d, b, a);
       if (lo == hi) next_of[a].push_back(b);
     }
   std::vector<std::vector<int>> loops;
@@ -298,7 +318,7 @@ TopologyReport analyze_topology(const MatrixXd& V, const MatrixXi& F) {
     }
     if (fs.size() != 2) continue;
     const int a = t.E(e, 0), b = t.E(e, 1);
-    const auto [lo, hi] = range_of(d, key(a, b, n));
+    const auto [lo, hi] = range_of(d, a, b);
     if (hi - lo != 1) ++r.inconsistent_orientation_edges;  // both faces traverse a->b (or b->a)
     for (int v : {a, b}) corners.unite(corner_of(fs[0], v), corner_of(fs[1], v));
   }

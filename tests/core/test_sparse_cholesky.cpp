@@ -29,7 +29,7 @@ double residual(const SparseMatrix& A, const MatrixXd& x, const MatrixXd& b) { r
 
 // 2D grid Laplacian (n x n unknowns, 5-point) plus a diagonal shift, with irregular weights so
 // that the ordering changes the rounding of the solution.
-SparseMatrix grid_laplacian(int n) {
+SparseMatrix grid_laplacian(int n, double phase = 0) {
   std::vector<Eigen::Triplet<double>> t;
   auto id = [n](int i, int j) { return j * n + i; };
   for (int j = 0; j < n; ++j)
@@ -37,7 +37,7 @@ SparseMatrix grid_laplacian(int n) {
       double diag = 1e-3;
       for (const auto& [di, dj] : {std::pair{1, 0}, std::pair{0, 1}}) {
         if (i + di >= n || j + dj >= n) continue;
-        const double w = 1.0 + 0.5 * std::sin(0.37 * i + 0.91 * j + di);
+        const double w = 1.0 + 0.5 * std::sin(0.37 * i + 0.91 * j + di + phase);
         t.emplace_back(id(i, j), id(i + di, j + dj), -w);
         t.emplace_back(id(i + di, j + dj), id(i, j), -w);
         t.emplace_back(id(i + di, j + dj), id(i + di, j + dj), w);
@@ -53,8 +53,9 @@ SparseMatrix grid_laplacian(int n) {
 }  // namespace
 
 TEST(SpdSolver, RefactorReusesTheAnalysisAndSolvesTheNewValues) {
-  // Above 100k unknowns: CHOLMOD's supernodal path (below: Eigen's LDLT), both exercised.
-  for (int n : {500, 120000}) {
+  // Eigen's LDLT up to 100k unknowns, CHOLMOD's simplicial factorisation above, its supernodal
+  // one (through the BLAS) above 250k: all three exercised.
+  for (int n : {500, 120000, 260000}) {
     const MatrixXd b = MatrixXd::Ones(n, 2);
     SpdSolver solver;
     ASSERT_TRUE(solver.refactor(path_laplacian(n, 1.0, 0.1)));  // first call computes
@@ -105,6 +106,29 @@ TEST(LevenbergMarquardt, MatrixFreeStepMatchesTheDenseNormalEquations) {
   EXPECT_GT((short_step - exact).norm() / exact.norm(), 1e-3);
   // A zero residual asks for no move.
   EXPECT_EQ(levenberg_marquardt_step(J, VectorXd::Zero(60), 50).norm(), 0.0);
+}
+
+TEST(SpdSolver, PreconditionedSolveReachesTheDirectSolution) {
+  // CG preconditioned with the factorisation of other weights of the same grid (the stretch-energy
+  // steps after the first): it converges to A's own direct solution, counts its iterations, and
+  // reports a budget too small to reach the tolerance.
+  const SparseMatrix A = grid_laplacian(60), nearby = grid_laplacian(60, 0.4);
+  MatrixXd b(A.rows(), 2);
+  for (Eigen::Index i = 0; i < b.rows(); ++i) b(i, 0) = std::sin(0.01 * i), b(i, 1) = 1.0;
+  const MatrixXd direct = SpdSolver(A).solve(b);
+  const SpdSolver preconditioner(nearby);
+  MatrixXd x = MatrixXd::Zero(A.rows(), 2);
+  int iterations = 0;
+  ASSERT_TRUE(preconditioner.solve_preconditioned(A, b, x, 1e-12, 100, &iterations));
+  EXPECT_LT((x - direct).norm() / direct.norm(), 1e-10);
+  EXPECT_GT(iterations, 2);   // the weights differ by up to 2x: not a solve in one step
+  EXPECT_LT(iterations, 60);  // but far fewer steps than unpreconditioned CG on 3600 unknowns
+  MatrixXd y = MatrixXd::Zero(A.rows(), 2);
+  EXPECT_FALSE(preconditioner.solve_preconditioned(A, b, y, 1e-12, 2));
+  // The tolerance is relative to the starting guess's residual: started at the solution it stays.
+  MatrixXd z = direct;
+  ASSERT_TRUE(preconditioner.solve_preconditioned(A, b, z, 1e-3, 20));
+  EXPECT_LT((z - direct).norm() / direct.norm(), 1e-12);
 }
 
 TEST(SpdSolver, TwoSolversAtOnceGiveTheBitsOfOne) {
