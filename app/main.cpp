@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <thread>
 #include <utility>
 #include <iostream>
 #include <vector>
@@ -223,6 +224,20 @@ void set_exit_code(int code) { g_exit_code = code; }
 
 namespace {
 
+// The --threads a command line asks for (0: none, or 0 = all cores), read before CLI11 parses it.
+int requested_threads(char** argv) {
+  int threads = 0;
+  for (int i = 1; argv[i] != nullptr && std::strcmp(argv[i], "--") != 0; ++i) {
+    const char* value = nullptr;
+    if (std::strcmp(argv[i], "--threads") == 0)
+      value = argv[i + 1];
+    else if (std::strncmp(argv[i], "--threads=", 10) == 0)
+      value = argv[i] + 10;
+    if (value != nullptr) threads = std::max(0, std::atoi(value));
+  }
+  return threads;
+}
+
 // Settings read by libraries when they are loaded, before main, so the process executes itself
 // once more with them in its environment (a setting the user made is kept; if the exec fails, the
 // run goes on with the defaults):
@@ -232,10 +247,18 @@ namespace {
 // - glibc.malloc.hugetlb=1: malloc asks for transparent huge pages (madvise), so the mesh-sized
 //   arrays take a tenth of the page faults and TLB misses (B3, 150k vertices: 0.91x the CPU time,
 //   4 paired runs); a glibc without the tunable ignores it.
+// - OMP_THREAD_LIMIT = --threads (else the cores): CHOLMOD's supernodal factorisation opens
+//   OpenMP regions of a fixed 4 threads (its build's CHOLMOD_OMP_NUM_THREADS, not
+//   omp_set_num_threads) to clear each supernode, so a --threads 1 map of 600k vertices ran 4
+//   threads woken through futexes thousands of times; capped, the same map (same bits) takes
+//   0.90x the CPU time (B600, 2 paired runs).
 void set_library_environment(char** argv) {
+  const int threads = requested_threads(argv);
+  const std::string limit = std::to_string(threads > 0 ? threads : std::max(1u, std::thread::hardware_concurrency()));
   bool changed = false;
   for (const auto& [name, value] : {std::pair<const char*, const char*>{"OMP_WAIT_POLICY", "passive"},
-                                    std::pair<const char*, const char*>{"GLIBC_TUNABLES", "glibc.malloc.hugetlb=1"}}) {
+                                    std::pair<const char*, const char*>{"GLIBC_TUNABLES", "glibc.malloc.hugetlb=1"},
+                                    std::pair<const char*, const char*>{"OMP_THREAD_LIMIT", limit.c_str()}}) {
     if (std::getenv(name) != nullptr) continue;
     if (::setenv(name, value, 1) != 0) return;
     changed = true;
