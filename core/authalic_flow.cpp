@@ -399,8 +399,12 @@ MatrixXd face_area_newton_displacement(const MatrixXd& UV, const MatrixXi& F, co
   MatrixXd D = MatrixXd::Zero(nv, 2);
   if (ncols == 0) return D;
   const VectorXd a = signed_face_areas_2d(UV, F);
+  // Rows: at most the faces, and about 6 per free vertex (ncols / 2 of them at most).
+  const std::size_t max_rows = static_cast<std::size_t>(std::min<Eigen::Index>(F.rows(), 4 * static_cast<Eigen::Index>(ncols)));
   std::vector<Eigen::Triplet<double>> t;
   std::vector<double> r;
+  t.reserve(6 * max_rows);
+  r.reserve(max_rows);
   int nrows = 0;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     bool touches = false;

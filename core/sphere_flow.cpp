@@ -255,8 +255,12 @@ MatrixXd sphere_polish_direction(const MatrixXd& S, const MatrixXi& F, const Vec
     T1.row(v) = t1.transpose();
     T2.row(v) = t2.transpose();
   }
+  // Rows: at most the faces, and about 6 per free vertex (its fan); 2 entries per free corner.
+  const std::size_t max_rows = static_cast<std::size_t>(std::min<Eigen::Index>(F.rows(), 7 * static_cast<Eigen::Index>(m)));
   std::vector<Eigen::Triplet<double>> t;
   std::vector<double> rows;
+  t.reserve(6 * max_rows);
+  rows.reserve(max_rows);
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     if (col[F(f, 0)] < 0 && col[F(f, 1)] < 0 && col[F(f, 2)] < 0) continue;
     const int row = static_cast<int>(rows.size());
