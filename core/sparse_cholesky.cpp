@@ -25,7 +25,6 @@ SpdSolver::SpdSolver(SpdSolver&&) noexcept = default;
 SpdSolver& SpdSolver::operator=(SpdSolver&&) noexcept = default;
 
 namespace {
-constexpr Eigen::Index kLdltMaxUnknowns = 100000;
 constexpr Eigen::Index kSupernodalMinUnknowns = 250000;
 
 // BLAS in one thread: a threaded OpenBLAS (the pthread or OpenMP build, if that is the machine's
@@ -63,7 +62,7 @@ bool SpdSolver::compute(const SparseMatrix& A) {
   // and a factorisation of 1.3 s against 0.5 s). Supernodal above 250k unknowns, where OpenBLAS's
   // dense kernels pay: S655's 585k unknowns (lnz 32M) refactorise in 2.9 s against 7.3 s
   // simplicial; at 149k both take 0.5 s, and below simplicial needs no BLAS at all.
-  impl_->use_fallback = A.rows() <= kLdltMaxUnknowns;
+  impl_->use_fallback = A.rows() <= kSpdLdltMaxUnknowns;
   impl_->cholmod.setMode(A.rows() > kSupernodalMinUnknowns ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
   if (!impl_->use_fallback) {
     single_threaded_blas();

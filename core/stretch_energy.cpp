@@ -147,6 +147,10 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
     if (exact && !solver.refactor(L)) break;
     refactor_next = false;
     bool failed = false;
+    auto factorise_now = [&] {
+      exact = true;
+      failed = !solver.refactor(L);
+    };
     auto interior_solve = [&](const MatrixXd& rhs) {
       if (!exact) {
         MatrixXd X(m, 2);  // start from the current map
@@ -156,8 +160,7 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
         const bool converged = solver.solve_preconditioned(L, rhs, X, opt.inexact_tolerance, opt.inexact_max_iterations, &iterations);
         refactor_next = iterations > opt.inexact_refactor_after;
         if (converged) return X;
-        exact = true;
-        failed = !solver.refactor(L);
+        factorise_now();
         if (failed) return X;
       }
       return solver.solve(rhs);
@@ -183,7 +186,7 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
         for (Eigen::Index v = 0; v < nv; ++v)
           if (on_boundary[v]) next.row(v) = UV.row(v) + lambda * (slid.row(v) - UV.row(v));
       const MatrixXd rhs = B * next;
-      for (bool was_exact = exact;; was_exact = true) {
+      for (;;) {
         const MatrixXd X = interior_solve(rhs);
         if (failed) break;
         for (Eigen::Index v = 0; v < nv; ++v)
@@ -194,9 +197,8 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
         next_area = signed_face_areas_2d(next, F);
         e = mean_log_stretch(next_area, face_target);
         accepted = !(next_area.array() <= min_area).any() && e < err;
-        if (accepted || was_exact) break;
-        exact = true;  // the inexact solve folded or did not help: factorise and solve exactly
-        failed = !solver.refactor(L);
+        if (accepted || exact) break;
+        factorise_now();  // the inexact solve folded or did not help: solve exactly
         if (failed) break;
       }
       if (failed) break;

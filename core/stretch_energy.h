@@ -33,12 +33,12 @@ struct StretchEnergyOptions {
   // cutting the residual of the current map by this factor in at most inexact_max_iterations
   // (else a refactorisation), and a refactorisation at the next step after a solve that needed
   // more than inexact_refactor_after; tolerance 0: every step exact.
-  // Only systems of more than inexact_min_unknowns: below, a factorisation costs about as much as
-  // the CG steps (Eigen's LDLT, 10k unknowns: 10 ms), so every step is exact there.
+  // Only systems of more than inexact_min_unknowns: below (SpdSolver's LDLᵀ range), a
+  // factorisation costs about as much as the CG steps, so every step is exact there.
   double inexact_tolerance = 1e-3;
   int inexact_max_iterations = 20;
   int inexact_refactor_after = 10;
-  int inexact_min_unknowns = 100000;
+  Eigen::Index inexact_min_unknowns = kSpdLdltMaxUnknowns;
 };
 
 struct StretchEnergyReport {

@@ -54,8 +54,6 @@ struct DirectedEdges {
   int id(std::size_t i) const { return from.items[i].second; }
 };
 
-DirectedEdges directed_edges(const MatrixXi& F, int n) { return DirectedEdges(F, n); }
-
 // The entries [lo, hi) of the half-edges from a to b.
 std::pair<std::size_t, std::size_t> range_of(const DirectedEdges& d, int a, int b) {
   const auto begin = d.from.items.begin() + d.from.start[a], end = d.from.items.begin() + d.from.start[a + 1];
@@ -105,7 +103,7 @@ EdgeTopology edge_topology(const MatrixXi& F, int num_vertices) {
 }
 
 VectorXi halfedge_twins(const MatrixXi& F, int num_vertices) {
-  const DirectedEdges d = directed_edges(F, num_vertices);
+  const DirectedEdges d(F, num_vertices);
   VectorXi twin = VectorXi::Constant(F.rows() * 3, -1);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int c = 0; c < 3; ++c) {
@@ -134,7 +132,7 @@ std::vector<std::vector<int>> vertex_neighbours(const MatrixXi& F, Eigen::Index 
 std::vector<std::vector<int>> boundary_loops(const MatrixXi& F, int num_vertices) {
   // A boundary half-edge a->b has no opposite b->a; its face lies on its left, so following the
   // half-edges themselves walks each loop with the interior on the left.
-  const DirectedEdges d = directed_edges(F, num_vertices);
+  const DirectedEdges d(F, num_vertices);
   std::vector<std::vector<int>> next_of(num_vertices);  // boundary half-edge targets from each vertex
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int c = 0; c < 3; ++c) {
@@ -303,7 +301,7 @@ TopologyReport analyze_topology(const MatrixXd& V, const MatrixXi& F) {
   }
   const EdgeTopology t = edge_topology(F, n);
   r.num_edges = static_cast<int>(t.E.rows());
-  const DirectedEdges d = directed_edges(F, n);
+  const DirectedEdges d(F, n);
   UnionFind corners(static_cast<int>(F.rows() * 3));  // corner id 3f+c; fans of faces around a vertex
   auto corner_of = [&](int f, int v) {
     for (int c = 0; c < 3; ++c)
