@@ -108,8 +108,24 @@ double window_radius(const MatrixXi& F, const VectorXd& dist, const VectorXd& ta
   return faces.empty() ? 0.0 : faces.back().first;
 }
 
+// The measure the window's crushed faces miss: Σ (target_f − share_f) over the faces below
+// e^log_ratio of their target with a corner inside chord radius rho_w of c (dist: each vertex's
+// chord distance to c).
+double window_missing(const MatrixXd& S, const MatrixXi& F, const VectorXd& target, const VectorXd& dist, double rho_w,
+                      double log_ratio) {
+  const VectorXd share = chord_area_shares(S, F);
+  double missing = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    if (!(dist[F(f, 0)] < rho_w || dist[F(f, 1)] < rho_w || dist[F(f, 2)] < rho_w)) continue;
+    if (share[f] < std::exp(log_ratio) * target[f]) missing += target[f] - share[f];
+  }
+  return missing;
+}
+
 // Rearranges the window about the patch; returns false (S unchanged) when it folds faces that
-// the repair cannot remove.
+// the repair cannot remove, or when its crushed faces end up missing more measure than before:
+// the repair by neighbour means can crush more than the rearrangement opened (a voxelised white
+// surface's bulb: missing 1.9e-4 -> 4.6e-5 rearranged, with 76 folds; 3.5e-4 repaired).
 bool rearrange_window(MatrixXd& S, const MatrixXi& F, const VectorXd& target, const std::vector<int>& patch,
                       const CrushedPatchOptions& opt, double missing) {
   Vec3 c = Vec3::Zero();
@@ -126,6 +142,7 @@ bool rearrange_window(MatrixXd& S, const MatrixXi& F, const VectorXd& target, co
   const std::vector<double> M = radial_measure(F, dist, target, rho_w, kBins);
   if (!(M.back() > 0)) return false;
   const MatrixXd before = S;
+  const double missing_before = window_missing(S, F, target, dist, rho_w, opt.crushed_log_ratio);
   for (Eigen::Index v = 0; v < nv; ++v) {
     const double d = dist[v];
     if (d >= rho_w || d <= 0) continue;
@@ -142,7 +159,8 @@ bool rearrange_window(MatrixXd& S, const MatrixXi& F, const VectorXd& target, co
     S.row(v) = (std::cos(theta) * c + std::sin(theta) * u).transpose();
   }
   if (sphere_flipped_faces(S, F) > 0) repair_sphere_flips(S, F);
-  if (sphere_flipped_faces(S, F) == 0) return true;
+  if (sphere_flipped_faces(S, F) == 0 && window_missing(S, F, target, dist, rho_w, opt.crushed_log_ratio) < missing_before)
+    return true;
   S = before;
   return false;
 }

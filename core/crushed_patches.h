@@ -21,7 +21,8 @@
 // holds `window_factor` times the patch's missing measure, so what is left is a density excess
 // of about 1/window_factor over a window of several elements: the scale a coarse Moser pass
 // resolves. Faces the rearrangement folds (slivers lying along a circle about c) are repaired by
-// neighbour means; a window whose folds the repair cannot remove is put back as it was.
+// neighbour means; a window whose folds the repair cannot remove, or whose crushed faces end up
+// missing more measure than before, is put back as it was.
 #include "core/mesh.h"
 
 namespace authalic {
@@ -40,7 +41,7 @@ struct CrushedPatchReport {
   int patches = 0;             // patches rearranged
   int crushed_faces = 0;       // faces in them
   double missing_share = 0;    // their missing measure before, share of the total
-  int patches_undone = 0;      // windows put back because their folds could not be repaired
+  int patches_undone = 0;      // windows put back: folds not repaired, or no less missing
 };
 
 // Inputs: S #V x 3 unit vectors (no flipped face), F #F x 3 counter-clockwise seen from outside,

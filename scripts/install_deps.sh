@@ -10,6 +10,7 @@ PACKAGES=(
   libnifti2-dev libgiftiio-dev zlib1g-dev libpng-dev libssl-dev libexpat1-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev libcsv-dev
   python3 python3-nibabel python3-numpy python3-scipy
+  python3-vtk9                             # scripts/mesh_families.py: voxelised and decimated surfaces (tests, bench)
   clang libclang-rt-14-dev libomp-dev      # libFuzzer targets (scripts/fuzz.sh), ThreadSanitizer
   connectome-workbench                     # wb_command: reference values for the sampling tests
   chromium                                 # headless screenshot of the HTML report (test)
