@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Debug build with AddressSanitizer + UndefinedBehaviorSanitizer, then the whole test suite on it.
 # -O1 keeps the Eigen-heavy tests fast enough while keeping frames and line numbers.
-# The three native-resolution map tests (fs741, 160k vertices: NativeResolution* in ctest) run
-# in the release suite; under the sanitizers each takes many minutes, so they run here only with
+# The native-resolution map tests (fs741 and the meshes made from it, 160k-630k vertices:
+# NativeResolution* in ctest) run in the release suite; under the sanitizers each takes many
+# minutes (the voxelised surface's sphere: over 10), so they run here only with
 #   SANITIZE_ALL=1 scripts/sanitize.sh
 # (their code paths -- flow, polish, untangling, the sphere -- are also run by the smaller tests).
 set -euo pipefail
