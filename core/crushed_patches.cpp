@@ -26,6 +26,9 @@ VectorXd chord_area_shares(const MatrixXd& S, const MatrixXi& F) {
   return a / a.sum();
 }
 
+// A face below e^log_ratio of its target share.
+bool is_crushed(double share, double target, double log_ratio) { return share < std::exp(log_ratio) * target; }
+
 int find_root(std::vector<int>& parent, int v) {
   while (parent[v] != v) v = parent[v] = parent[parent[v]];
   return v;
@@ -39,7 +42,7 @@ std::vector<std::vector<int>> crushed_patches(const MatrixXi& F, Eigen::Index nv
   std::iota(parent.begin(), parent.end(), 0);
   std::vector<int> crushed;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    if (!(share[f] < std::exp(log_ratio) * target[f])) continue;
+    if (!is_crushed(share[f], target[f], log_ratio)) continue;
     crushed.push_back(static_cast<int>(f));
     for (int c = 1; c < 3; ++c) parent[find_root(parent, F(f, c))] = find_root(parent, F(f, 0));
   }
@@ -117,7 +120,7 @@ double window_missing(const MatrixXd& S, const MatrixXi& F, const VectorXd& targ
   double missing = 0;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     if (!(dist[F(f, 0)] < rho_w || dist[F(f, 1)] < rho_w || dist[F(f, 2)] < rho_w)) continue;
-    if (share[f] < std::exp(log_ratio) * target[f]) missing += target[f] - share[f];
+    if (is_crushed(share[f], target[f], log_ratio)) missing += target[f] - share[f];
   }
   return missing;
 }

@@ -35,7 +35,24 @@ bool have_evalmap() {
          run_command("/usr/bin/python3 -c 'import nibabel, numpy'") == 0;
 }
 
+// evalmap.py's metrics of a sphere map (surface and sphere: GIFTI paths), written to dir/e.json.
+nlohmann::json evalmap_sphere(const std::string& surface, const std::string& sphere, const std::string& dir) {
+  const std::string json = dir + "/e.json";
+  const std::string cmd = "/usr/bin/python3 " + authalic::test::shared_data("../tools/evalmap.py") + " " + surface + " " +
+                          sphere + " --domain sphere --json > " + json;
+  EXPECT_EQ(run_command(cmd), 0) << cmd;
+  return read_json(json);
+}
+
 }  // namespace
+
+// In a test body: fails under CI=true, else skips, when `available` is false (what: the tools).
+#define AUTHALIC_REQUIRE_TOOLS(available, what)                                    \
+  if (!(available)) {                                                              \
+    if (authalic::test::running_in_ci()) FAIL() << what << " missing under CI=true"; \
+    GTEST_SKIP() << what << " not available";                                      \
+  }
+#define AUTHALIC_REQUIRE_EVALMAP() AUTHALIC_REQUIRE_TOOLS(have_evalmap(), "evalmap.py or python3-nibabel")
 
 TEST(SphereCli, NativeResolutionWhiteSurfaceIsAuthalic) {
   // Issue 12: a real subject's native-resolution white surface (164,000 vertices), where the flow
@@ -55,13 +72,8 @@ TEST(SphereCli, NativeResolutionWhiteSurfaceIsAuthalic) {
   EXPECT_LE(j.at("metrics").at("face_ln_area_abs").at("mean").get<double>(), 0.05);
   EXPECT_NEAR(j.at("square_route").at("cap_area_fraction").get<double>(), 0.1, 0.01);
   EXPECT_EQ(j.at("square_route").at("coarse_sphere_pass").at("passes"), 1);
-  if (!have_evalmap()) {
-    if (authalic::test::running_in_ci()) FAIL() << "evalmap.py or python3-nibabel missing under CI=true";
-    GTEST_SKIP() << "evalmap.py or python3-nibabel not available";
-  }
-  const std::string evalmap = authalic::test::shared_data("../tools/evalmap.py");
-  ASSERT_EQ(run_command("/usr/bin/python3 " + evalmap + " " + white + " " + out + " --domain sphere --json > " + dir + "/e.json"), 0);
-  const auto e = read_json(dir + "/e.json");
+  AUTHALIC_REQUIRE_EVALMAP();
+  const auto e = evalmap_sphere(white, out, dir);
   EXPECT_EQ(e.at("flips"), 0);
   EXPECT_LE(e.at("element_area_cv").get<double>(), 0.0017);
 }
@@ -85,13 +97,8 @@ TEST(SphereCli, NativeResolutionPialSurfaceMeetsTheElementBar) {
   EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.005);
   EXPECT_LE(j.at("metrics").at("face_ln_area_abs").at("mean").get<double>(), 0.05);
   EXPECT_GE(j.at("square_route").at("crushed_patches").at("opened").get<int>(), 1);
-  if (!have_evalmap()) {
-    if (authalic::test::running_in_ci()) FAIL() << "evalmap.py or python3-nibabel missing under CI=true";
-    GTEST_SKIP() << "evalmap.py or python3-nibabel not available";
-  }
-  const std::string evalmap = authalic::test::shared_data("../tools/evalmap.py");
-  ASSERT_EQ(run_command("/usr/bin/python3 " + evalmap + " " + pial + " " + out + " --domain sphere --json > " + dir + "/e.json"), 0);
-  const auto e = read_json(dir + "/e.json");
+  AUTHALIC_REQUIRE_EVALMAP();
+  const auto e = evalmap_sphere(pial, out, dir);
   EXPECT_EQ(e.at("flips"), 0);
   EXPECT_LE(e.at("element_area_cv").get<double>(), 0.005);
   // The two evaluators agree on the cells (issue 15: both exact).
@@ -104,11 +111,8 @@ static bool have_mesh_families() {
 }
 static std::string mesh_families() { return "/usr/bin/python3 " + std::string(AUTHALIC_SOURCE_DIR) + "/scripts/mesh_families.py "; }
 
-#define AUTHALIC_REQUIRE_MESH_FAMILIES()                                                                     \
-  if (!have_mesh_families()) {                                                                               \
-    if (authalic::test::running_in_ci()) FAIL() << "python3 with nibabel, numpy, scipy, vtk missing under CI=true"; \
-    GTEST_SKIP() << "python3 with nibabel, numpy, scipy, vtk not available";                                 \
-  }
+#define AUTHALIC_REQUIRE_MESH_FAMILIES() \
+  AUTHALIC_REQUIRE_TOOLS(have_mesh_families(), "python3 with nibabel, numpy, scipy, vtk")
 
 TEST(SphereCli, NativeResolutionNoisyWhiteSurfaceIsAuthalic) {
   // The native white surface with Gaussian noise of 0.1 mm on every coordinate (a tenth of its
@@ -149,13 +153,8 @@ TEST(SphereCli, NativeResolutionVoxelisedWhiteSurfaceIsAuthalic) {
   EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.01);
   EXPECT_LE(j.at("metrics").at("face_ln_area_abs").at("mean").get<double>(), 0.01);
   // The independent evaluator agrees (0.0077022 and 0.0077021 measured).
-  if (!have_evalmap()) {
-    if (authalic::test::running_in_ci()) FAIL() << "evalmap.py or python3-nibabel missing under CI=true";
-    GTEST_SKIP() << "evalmap.py or python3-nibabel not available";
-  }
-  const std::string evalmap = authalic::test::shared_data("../tools/evalmap.py");
-  ASSERT_EQ(run_command("/usr/bin/python3 " + evalmap + " " + mesh + " " + out + " --domain sphere --json > " + dir + "/e.json"), 0);
-  const auto e = read_json(dir + "/e.json");
+  AUTHALIC_REQUIRE_EVALMAP();
+  const auto e = evalmap_sphere(mesh, out, dir);
   EXPECT_EQ(e.at("flips"), 0);
   EXPECT_NEAR(e.at("element_area_cv").get<double>(), j.at("metrics").at("element_cv").get<double>(), 2e-5);
 }
