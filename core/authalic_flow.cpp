@@ -90,6 +90,44 @@ int grid_resolution_for(Eigen::Index faces, double width) {
   return static_cast<double>(faces) / std::max(width, 1e-12) <= kMaxFacesPerUnitHeight ? 256 : 512;
 }
 
+namespace {
+
+// An upper bound of the Moser speed |∇g| / ((1 − t) ρ + t ρ_1) anywhere within `radius` cells of
+// each cell of the ny x nx grid, for any t in [0, 1]: per cell, the largest |gx| and |gy| of the
+// staggered nodes its bilinear interpolation reads (GridBilinear, clamped at the walls) over the
+// smallest density it reads, then the largest of those over the (2 radius + 1)² cells around.
+MatrixXd moser_speed_bound(const MatrixXd& gx, const MatrixXd& gy, const MatrixXd& rho, const MatrixXd* rho_1, int radius) {
+  const int ny = static_cast<int>(rho.rows()), nx = static_cast<int>(rho.cols());
+  auto clamp_index = [&](int r, int n) { return std::clamp(r, 0, n - 1); };
+  MatrixXd a(ny, nx);
+#pragma omp parallel for schedule(static)
+  for (int r = 0; r < ny; ++r)
+    for (int c = 0; c < nx; ++c) {
+      double mx = 0, my = 0, dmin = std::numeric_limits<double>::infinity();
+      for (int i = r - 1; i <= r + 1; ++i)  // gx: ny x (nx + 1), nodes at (c hx, (i + ½) hy)
+        for (int j = c; j <= c + 1; ++j) mx = std::max(mx, std::abs(gx(clamp_index(i, ny), clamp_index(j, nx + 1))));
+      for (int i = r; i <= r + 1; ++i)  // gy: (ny + 1) x nx, nodes at ((j + ½) hx, i hy)
+        for (int j = c - 1; j <= c + 1; ++j) my = std::max(my, std::abs(gy(clamp_index(i, ny + 1), clamp_index(j, nx))));
+      for (int i = r - 1; i <= r + 1; ++i)  // densities at the cell centres
+        for (int j = c - 1; j <= c + 1; ++j) {
+          dmin = std::min(dmin, rho(clamp_index(i, ny), clamp_index(j, nx)));
+          dmin = std::min(dmin, rho_1 ? (*rho_1)(clamp_index(i, ny), clamp_index(j, nx)) : 1.0);
+        }
+      a(r, c) = std::hypot(mx, my) / dmin;
+    }
+  // Separable max filter over the (2 radius + 1)² neighbourhood.
+  MatrixXd b(ny, nx), d(ny, nx);
+#pragma omp parallel for schedule(static)
+  for (int r = 0; r < ny; ++r)
+    for (int c = 0; c < nx; ++c) b(r, c) = a.row(r).segment(std::max(0, c - radius), std::min(nx, c + radius + 1) - std::max(0, c - radius)).maxCoeff();
+#pragma omp parallel for schedule(static)
+  for (int r = 0; r < ny; ++r)
+    for (int c = 0; c < nx; ++c) d(r, c) = b.col(c).segment(std::max(0, r - radius), std::min(ny, r + radius + 1) - std::max(0, r - radius)).maxCoeff();
+  return d;
+}
+
+}  // namespace
+
 MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const MatrixXi& F, const VectorXi& side_mask,
                          double width, const GridFlowOptions& options, double fraction, const VectorXi& only_moving) {
   const int resolution = options.cells();
@@ -143,8 +181,24 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
   if (only_moving.size() == UV.rows())
     for (Eigen::Index v = 0; v < UV.rows(); ++v) used[v] = used[v] && only_moving[v];
 
+  // RK4 steps per vertex: options.rk4_steps, or fewer where the speed bound of the cells around
+  // the vertex shows it cannot leave them within the pass (travel <= kBoundRadius cells) and each
+  // step then covers at most options.max_cells_per_step cells. After the stretch-energy start
+  // most vertices move a small fraction of a cell per pass, and 20 fixed steps were a third of the
+  // flow's time. Per vertex, so the result does not depend on the thread count.
+  constexpr int kBoundRadius = 2, kMinRk4Steps = 2;
+  const double h = std::min(hx, hy);
+  MatrixXd speed;
+  if (options.max_cells_per_step > 0) speed = moser_speed_bound(gx, gy, rho_s, fraction < 1.0 ? &rho_1 : nullptr, kBoundRadius);
+  auto steps_for = [&](double x, double y) {
+    if (speed.size() == 0) return rk4_steps;
+    const int c = std::clamp(static_cast<int>(x / hx), 0, nx - 1), r = std::clamp(static_cast<int>(y / hy), 0, ny - 1);
+    const double travel = speed(r, c);  // over t in [0, 1]
+    if (!(travel <= kBoundRadius * h)) return rk4_steps;
+    return std::clamp(static_cast<int>(std::ceil(travel / (options.max_cells_per_step * h))), std::min(kMinRk4Steps, rk4_steps), rk4_steps);
+  };
+
   MatrixXd out = UV;
-  const double dt = 1.0 / rk4_steps;
 #pragma omp parallel for schedule(static)
   for (Eigen::Index v = 0; v < UV.rows(); ++v) {
     if (!used[v]) continue;
@@ -158,7 +212,9 @@ MatrixXd moser_grid_pass(const VectorXd& face_target, const MatrixXd& UV, const 
       *ux = (mask & (kSideLeft | kSideRight)) ? 0.0 : vx(px, py) * s;
       *uy = (mask & (kSideBottom | kSideTop)) ? 0.0 : vy(px, py) * s;
     };
-    for (int k = 0; k < rk4_steps; ++k) {
+    const int steps = steps_for(x, y);
+    const double dt = 1.0 / steps;
+    for (int k = 0; k < steps; ++k) {
       rk4_step(vel, k * dt, dt, x, y);
       constrain_to_rectangle(x, y, mask, width);
     }

@@ -51,6 +51,9 @@ struct GridFlowOptions {
   // grid_resolution_for in the square map from its stretch-energy start (core/square_map.h).
   int resolution = 0;
   int rk4_steps = 20;            // RK4 steps over t in [0, 1] per pass (20 and 80 agree to 1e-3 on benchmark B1, docs/references.md)
+  // Fewer steps for a vertex whose path provably stays within a few cells (moser_grid_pass): at
+  // most this many cells per step, at least 2 steps. 0: every vertex takes rk4_steps.
+  double max_cells_per_step = 0.5;
   double smoothing_cells = 1.0;  // Gaussian standard deviation of the density smoothing, in cells
   // Passes beyond 3 are stopped by min_pass_gain on every mesh measured (benchmarks B1-B3, fs741
   // white and pial): `flatten`, `run` and `rectangle` take this default (they had 3 and 6).

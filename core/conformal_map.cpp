@@ -211,7 +211,7 @@ MatrixXd solve_harmonic(const MatrixXd& V, const MatrixXi& F, const std::vector<
     // boundary whatever the triangle shapes, so a Cholesky factorisation applies.
     SpdSolver local;
     SpdSolver& solver = reuse ? *reuse : local;
-    if (!solver.refactor(A)) throw std::runtime_error("harmonic_map: cotangent factorisation failed");
+    if (!solver.refactor(A, &index)) throw std::runtime_error("harmonic_map: cotangent factorisation failed");
     x = solver.solve(rhs);
   } else {
     Eigen::SparseLU<SparseMatrix> solver;

@@ -10,12 +10,39 @@
 
 namespace authalic {
 
+namespace {
+// Eigen's CHOLMOD wrapper with one more way to analyse: with a given ordering
+// (cholmod_analyze_p), which Eigen's analyzePattern does not offer.
+class OrderedCholmod : public Eigen::CholmodDecomposition<SparseMatrix> {
+ public:
+  void analyze_with_ordering(const SparseMatrix& A, std::vector<int>& perm) {
+    if (m_cholmodFactor) cholmod_free_factor(&m_cholmodFactor, &cholmod());
+    cholmod_sparse view = viewAsCholmod(A.selfadjointView<Eigen::Lower>());
+    const int ordering = cholmod().method[0].ordering;
+    cholmod().method[0].ordering = CHOLMOD_GIVEN;
+    m_cholmodFactor = cholmod_analyze_p(&view, perm.data(), nullptr, 0, &cholmod());
+    cholmod().method[0].ordering = ordering;
+    m_isInitialized = true;
+    m_info = m_cholmodFactor ? Eigen::Success : Eigen::NumericalIssue;
+    m_analysisIsOk = m_cholmodFactor != nullptr;
+    m_factorizationIsOk = false;
+  }
+};
+
+// METIS keeps its random generator in process-global state: two orderings at once (the two
+// hemispheres' maps, made side by side by `run`) draw from one sequence and came out different
+// from run to run. One ordering at a time keeps every map independent of what else the process
+// does.
+std::mutex metis_mutex;
+}  // namespace
+
 struct SpdSolver::Impl {
-  Eigen::CholmodDecomposition<SparseMatrix> cholmod;
+  OrderedCholmod cholmod;
   Eigen::SimplicialLDLT<SparseMatrix> fallback;
   bool use_fallback = false;
   bool ok = false;
   std::vector<SparseMatrix::StorageIndex> outer, inner;  // the pattern compute() analysed
+  std::shared_future<std::vector<int>> vertex_order;     // order_by_vertices
 };
 
 SpdSolver::SpdSolver() : impl_(std::make_unique<Impl>()) {}
@@ -39,6 +66,24 @@ void single_threaded_blas() {
   });
 }
 
+// CHOLMOD's Perm for the n rows of a system from a vertex order: the rows of the vertices in
+// that order, then the rows no vertex of it names, ascending.
+std::vector<int> rows_in_vertex_order(const std::vector<int>& vertex_order, const std::vector<int>& row_of_vertex, Eigen::Index n) {
+  std::vector<int> perm;
+  perm.reserve(static_cast<std::size_t>(n));
+  std::vector<char> placed(static_cast<std::size_t>(n), 0);
+  for (int v : vertex_order) {
+    if (v < 0 || static_cast<std::size_t>(v) >= row_of_vertex.size()) continue;
+    const int r = row_of_vertex[static_cast<std::size_t>(v)];
+    if (r < 0 || r >= n || placed[static_cast<std::size_t>(r)]) continue;
+    placed[static_cast<std::size_t>(r)] = 1;
+    perm.push_back(r);
+  }
+  for (Eigen::Index r = 0; r < n; ++r)
+    if (!placed[static_cast<std::size_t>(r)]) perm.push_back(static_cast<int>(r));
+  return perm;
+}
+
 bool same_pattern(const SparseMatrix& A, const std::vector<SparseMatrix::StorageIndex>& outer,
                   const std::vector<SparseMatrix::StorageIndex>& inner) {
   return A.isCompressed() && static_cast<std::size_t>(A.outerSize() + 1) == outer.size() &&
@@ -47,7 +92,38 @@ bool same_pattern(const SparseMatrix& A, const std::vector<SparseMatrix::Storage
 }
 }  // namespace
 
-bool SpdSolver::compute(const SparseMatrix& A) {
+std::vector<int> mesh_vertex_ordering(const MatrixXi& F, int num_vertices) {
+  // The vertex adjacency as a symmetric pattern (lower triangle), ordered by CHOLMOD's METIS
+  // interface as the analyses below would order a system of this pattern.
+  std::vector<Eigen::Triplet<double>> edges;
+  edges.reserve(static_cast<std::size_t>(F.rows()) * 3 + static_cast<std::size_t>(num_vertices));
+  for (int v = 0; v < num_vertices; ++v) edges.emplace_back(v, v, 1.0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = F(f, c), b = F(f, (c + 1) % 3);
+      edges.emplace_back(std::max(a, b), std::min(a, b), 1.0);
+    }
+  SparseMatrix pattern(num_vertices, num_vertices);
+  pattern.setFromTriplets(edges.begin(), edges.end());
+  const SparseMatrix& P = pattern;
+  cholmod_sparse view = Eigen::viewAsCholmod(P.selfadjointView<Eigen::Lower>());
+  std::vector<int> perm(static_cast<std::size_t>(num_vertices));
+  cholmod_common common;
+  cholmod_start(&common);
+  common.print = 0;
+  bool ok;
+  {
+    const std::lock_guard<std::mutex> lock(metis_mutex);
+    ok = cholmod_metis(&view, nullptr, 0, 1, perm.data(), &common) != 0;
+  }
+  cholmod_finish(&common);
+  if (!ok) perm.clear();  // compute() then orders the system itself
+  return perm;
+}
+
+void SpdSolver::order_by_vertices(std::shared_future<std::vector<int>> vertex_order) { impl_->vertex_order = std::move(vertex_order); }
+
+bool SpdSolver::compute(const SparseMatrix& A, const std::vector<int>* row_of_vertex) {
   if (A.isCompressed()) {
     impl_->outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
     impl_->inner.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
@@ -69,16 +145,16 @@ bool SpdSolver::compute(const SparseMatrix& A) {
     impl_->cholmod.cholmod().nmethods = 1;
     impl_->cholmod.cholmod().method[0].ordering = CHOLMOD_METIS;
     impl_->cholmod.cholmod().print = 0;  // quiet: a non-definite matrix falls back below
-    {
-      // METIS keeps its random generator in process-global state: two orderings at once (the
-      // two hemispheres' maps, made side by side by `run`) draw from one sequence and came out
-      // different from run to run. One ordering at a time keeps every map independent of what
-      // else the process does.
-      static std::mutex metis_mutex;
+    std::vector<int> perm;
+    if (row_of_vertex && impl_->vertex_order.valid() && !impl_->vertex_order.get().empty())
+      perm = rows_in_vertex_order(impl_->vertex_order.get(), *row_of_vertex, A.rows());
+    if (!perm.empty()) {
+      impl_->cholmod.analyze_with_ordering(A, perm);
+    } else {
       const std::lock_guard<std::mutex> lock(metis_mutex);
       impl_->cholmod.analyzePattern(A);
     }
-    impl_->cholmod.factorize(A);
+    if (impl_->cholmod.info() == Eigen::Success) impl_->cholmod.factorize(A);
     impl_->use_fallback = impl_->cholmod.info() != Eigen::Success;
   }
   if (impl_->use_fallback) impl_->fallback.compute(A);
@@ -86,16 +162,16 @@ bool SpdSolver::compute(const SparseMatrix& A) {
   return impl_->ok;
 }
 
-bool SpdSolver::refactor(const SparseMatrix& A) {
+bool SpdSolver::refactor(const SparseMatrix& A, const std::vector<int>* row_of_vertex) {
   // Same pattern as the last compute(): keep its ordering and symbolic analysis (METIS on a 150k
   // mesh costs as much as the numeric factorisation).
-  if (!impl_->ok || !same_pattern(A, impl_->outer, impl_->inner)) return compute(A);
+  if (!impl_->ok || !same_pattern(A, impl_->outer, impl_->inner)) return compute(A, row_of_vertex);
   if (impl_->use_fallback)
     impl_->fallback.factorize(A);
   else
     impl_->cholmod.factorize(A);
   impl_->ok = (impl_->use_fallback ? impl_->fallback.info() : impl_->cholmod.info()) == Eigen::Success;
-  if (!impl_->ok && !impl_->use_fallback) return compute(A);  // not definite for CHOLMOD: LDLᵀ
+  if (!impl_->ok && !impl_->use_fallback) return compute(A, row_of_vertex);  // not definite for CHOLMOD: LDLᵀ
   return impl_->ok;
 }
 

@@ -3,7 +3,9 @@
 // unknowns, CHOLMOD's simplicial Cholesky with nested-dissection (METIS) ordering above (falling
 // back to LDLᵀ if CHOLMOD reports the matrix not positive definite). No BLAS is involved, so results
 // do not depend on the OpenMP thread count or on which BLAS the machine has.
+#include <future>
 #include <memory>
+#include <vector>
 
 #include "core/mesh.h"
 
@@ -13,6 +15,12 @@ namespace authalic {
 // with CHOLMOD.
 inline constexpr Eigen::Index kSpdLdltMaxUnknowns = 100000;
 
+// Nested-dissection ordering (METIS, through CHOLMOD) of a mesh's vertices by its edges: the
+// vertex ids, first eliminated first (vertices F does not use come last). It orders any system
+// whose unknowns are (most of) these vertices, and needs only the faces, so it can be computed
+// while such a system is still being assembled (SpdSolver::order_by_vertices).
+std::vector<int> mesh_vertex_ordering(const MatrixXi& F, int num_vertices);
+
 class SpdSolver {
  public:
   SpdSolver();
@@ -21,12 +29,20 @@ class SpdSolver {
   SpdSolver(SpdSolver&&) noexcept;
   SpdSolver& operator=(SpdSolver&&) noexcept;
 
-  // Factorises A; false if neither CHOLMOD nor the fallback succeeds.
-  bool compute(const SparseMatrix& A);
+  // From now on, the CHOLMOD analyses of systems given with their rows' vertices (compute and
+  // refactor with row_of_vertex) order the rows by `vertex_order` (mesh_vertex_ordering, which
+  // may still be running) instead of running METIS on the system: rows without a vertex in it
+  // come last. The order depends only on the mesh, so the result does not depend on whether it
+  // was computed beforehand or at the analysis.
+  void order_by_vertices(std::shared_future<std::vector<int>> vertex_order);
+  // Factorises A; false if neither CHOLMOD nor the fallback succeeds. row_of_vertex (optional):
+  // per mesh vertex, its row of A or a negative value (see order_by_vertices).
+  bool compute(const SparseMatrix& A, const std::vector<int>* row_of_vertex = nullptr);
   // Factorises A reusing the ordering and symbolic analysis of the last compute() when A has its
-  // sparsity pattern (checked; otherwise this is compute(A)). A default-constructed solver
-  // computes on the first call, so one object can serve a sequence of systems of one mesh.
-  bool refactor(const SparseMatrix& A);
+  // sparsity pattern (checked; otherwise this is compute(A, row_of_vertex)). A
+  // default-constructed solver computes on the first call, so one object can serve a sequence
+  // of systems of one mesh.
+  bool refactor(const SparseMatrix& A, const std::vector<int>* row_of_vertex = nullptr);
   bool ok() const;
   MatrixXd solve(const MatrixXd& B) const;
   // Solves A X = B by conjugate gradients, column by column, preconditioned with this solver's
