@@ -13,7 +13,7 @@ ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 AUTHALIC="$(realpath "${1:-${AUTHALIC:-$ROOT/build/authalic}}")"
 SHARED="$ROOT/../shared/data"
 PY=/usr/bin/python3
-[ -x "$AUTHALIC" ] || { echo "bench_mesh_families: $AUTHALIC not found; build first (scripts/build.sh)" >&2; exit 2; }
+[ -f "$AUTHALIC" ] && [ -x "$AUTHALIC" ] || { echo "bench_mesh_families: $AUTHALIC is not the authalic executable; build first (scripts/build.sh)" >&2; exit 2; }
 [ -f "$SHARED/fs741/lh.white.surf.gii" ] || { echo "bench_mesh_families: $SHARED/fs741 missing" >&2; exit 2; }
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <random>
 
+#include "core/domain.h"
 #include "core/mesh.h"
 
 namespace authalic::test {
@@ -38,6 +39,18 @@ inline TriMesh square_grid(int n) {
       m.F.row(f++) << a, d, c;
     }
   return m;
+}
+
+// RectangleSide bits of the vertices of a mesh of the unit square (square_grid) on its sides.
+inline VectorXi square_sides(const MatrixXd& V) {
+  VectorXi mask = VectorXi::Zero(V.rows());
+  for (Eigen::Index v = 0; v < V.rows(); ++v) {
+    if (V(v, 0) == 0.0) mask[v] |= kSideLeft;
+    if (V(v, 0) == 1.0) mask[v] |= kSideRight;
+    if (V(v, 1) == 0.0) mask[v] |= kSideBottom;
+    if (V(v, 1) == 1.0) mask[v] |= kSideTop;
+  }
+  return mask;
 }
 
 // A planar disk (radius 1) with a strongly non-uniform triangulation: rings crowd toward the

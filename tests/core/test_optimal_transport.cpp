@@ -44,17 +44,6 @@ double max_abs_divergence(const MatrixXd& wx, const MatrixXd& wy, double h) {
   return worst;
 }
 
-VectorXi square_sides(const MatrixXd& V) {
-  VectorXi mask = VectorXi::Zero(V.rows());
-  for (Eigen::Index v = 0; v < V.rows(); ++v) {
-    if (V(v, 0) == 0.0) mask[v] |= kSideLeft;
-    if (V(v, 0) == 1.0) mask[v] |= kSideRight;
-    if (V(v, 1) == 0.0) mask[v] |= kSideBottom;
-    if (V(v, 1) == 1.0) mask[v] |= kSideTop;
-  }
-  return mask;
-}
-
 }  // namespace
 
 TEST(OptimalTransport, LerayProjectionKeepsADivergenceFreeFieldAndRemovesAGradient) {
@@ -93,7 +82,7 @@ TEST(OptimalTransport, RefinementUndoesAnAreaPreservingSwirl) {
       const Eigen::Vector2d mid = p + 0.5 / steps * swirl(p.x(), p.y(), 0.02);
       Y.row(v) = (p + 1.0 / steps * swirl(mid.x(), mid.y(), 0.02)).transpose();
     }
-  const VectorXi sides = square_sides(m.V);
+  const VectorXi sides = test::square_sides(m.V);
   const VectorXd measure = face_areas(m.V, m.F);
   ASSERT_EQ(count_flipped(Y, m.F), 0);
   const double before = transport_cost(X, Y, m.F, measure);
@@ -122,7 +111,7 @@ TEST(OptimalTransport, AnOptimalMapIsLeftAlone) {
   const TriMesh m = test::square_grid(20);
   const MatrixXd X = m.V.leftCols(2);
   const OptimalTransportResult r =
-      optimal_transport_refine(X, X, m.F, square_sides(m.V), 1.0, face_areas(m.V, m.F));
+      optimal_transport_refine(X, X, m.F, test::square_sides(m.V), 1.0, face_areas(m.V, m.F));
   EXPECT_EQ(r.report.final_cost, 0.0);
   EXPECT_EQ(r.report.iterations, 0);
   EXPECT_TRUE(r.UV == X);

@@ -173,13 +173,7 @@ TEST(SquareMap, CurvedPatchMeetsTheAccuracyTargets) {
 TEST(GridFlow, AdaptiveRk4StepsLandWhereFixedStepsDo) {
   const TriMesh m = test::square_grid(48);
   const MatrixXd UV = m.V.leftCols(2);
-  VectorXi side = VectorXi::Zero(UV.rows());
-  for (Eigen::Index v = 0; v < UV.rows(); ++v) {
-    if (UV(v, 0) == 0.0) side[v] |= kSideLeft;
-    if (UV(v, 0) == 1.0) side[v] |= kSideRight;
-    if (UV(v, 1) == 0.0) side[v] |= kSideBottom;
-    if (UV(v, 1) == 1.0) side[v] |= kSideTop;
-  }
+  const VectorXi side = test::square_sides(m.V);
   VectorXd target = face_areas(m.V, m.F);
   for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
     const Eigen::RowVector2d c = (UV.row(m.F(f, 0)) + UV.row(m.F(f, 1)) + UV.row(m.F(f, 2))) / 3.0;
