@@ -54,12 +54,16 @@ flat B2 "$fs5/pial_left.gii.gz" 1 --faces-from "$fs5/flat_left.gii.gz"
 flat B1x1 "$work/b1x1.surf.gii" 1
 flat B3 "$work/b3.surf.gii" 1
 flat B600 "$work/b600.surf.gii" 1
-echo "bench_peers: B3 and R1 on 2 threads, paired with 1 thread (3 pairs)" >&2
+echo "bench_peers: B3 on 2 threads, paired with 1 thread (3 pairs); R1 on 2 threads (3 runs)" >&2
 for p in 1 2 3; do
   flat "B3-t1-$p" "$work/b3.surf.gii" 1
   flat "B3-t2-$p" "$work/b3.surf.gii" 2
 done
+# R1 three times: its bar is a 2-thread wall time, which one run on a shared 2-core machine
+# measures poorly (the median is taken, as for B3's pairs).
 flat R1 "$fs741/lh.white.surf.gii" 2 --label "$fs741/lh.cortex.label"
+flat R1-2 "$fs741/lh.white.surf.gii" 2 --label "$fs741/lh.cortex.label"
+flat R1-3 "$fs741/lh.white.surf.gii" 2 --label "$fs741/lh.cortex.label"
 echo "bench_peers: spheres" >&2
 timed S1 sphere "$fs5/white_left.gii.gz" "$work/S1.surf.gii" --metrics "$work/S1.json" --threads 1 --keep-failed
 timed S655 sphere "$work/s655.surf.gii" "$work/S655.surf.gii" --metrics "$work/S655.json" --threads 1 --keep-failed
@@ -147,6 +151,8 @@ speedup = 1 / ratio
 share = max(0.0, 2 * (1 - 1 / speedup))
 print(f'threads (B3, 3 pairs): wall 1 thread {", ".join(f"{x:.2f}" for x in w1)} s; 2 threads {", ".join(f"{x:.2f}" for x in w2)} s;'
       f' median ratio 2/1 {ratio:.3f}; parallel share (Amdahl) {share:.2f}')
+r1_wall = [t(n)['wall'] for n in ('R1', 'R1-2', 'R1-3')]
+print(f'R1 on 2 threads, 3 runs: wall {", ".join(f"{x:.2f}" for x in r1_wall)} s; median {statistics.median(r1_wall):.2f} s')
 rs, rr = t('run-sample'), t('run-real')
 print(f'run: sample patient {rs["cpu"]:.2f} s CPU (1 thread, exit {rs["code"]}); real subject (fs741 lh + its mirror image, SPM PET)'
       f' {rr["wall"]:.2f} s wall, {rr["cpu"]:.2f} s CPU (exit {rr["code"]})')
@@ -163,7 +169,7 @@ req('S1 element CV', rows['S1'][0]['element_cv'], 0.004)
 req('R1 per-face mean', face('R1'), 0.04)
 req('B3 CPU s (1 thread)', t('B3')['cpu'], 2.5)
 req('B3 wall s (2 threads, median)', statistics.median(w2), 2.0)
-req('R1 wall s (2 threads)', t('R1')['wall'], 5.0)
+req('R1 wall s (2 threads, median of 3)', statistics.median(r1_wall), 5.0)
 req('B600 exit status', b600['code'], 0)
 req('B600 flips', rows['B600'][0]['flips'], 0)
 req('B600 CPU s', b600['cpu'], 15)

@@ -163,7 +163,8 @@ VectorXd target_face_measure(const MatrixXd& V, const MatrixXi& F, const VectorX
 VectorXd vertex_log_ratio(const VectorXd& face_target, const MatrixXd& UV, const MatrixXi& F, int num_vertices);
 
 // One Moser pass on the grid of [0, width] x [0, 1]: rasterise, smooth, solve, advect (RK4) with
-// `grid`'s resolution, smoothing and RK4 steps. Returns the moved UV. fraction < 1: a partial pass
+// `grid`'s resolution, smoothing and RK4 steps (per vertex: fewer where a bound of the speed
+// around it allows, GridFlowOptions::max_cells_per_step). Returns the moved UV. fraction < 1: a partial pass
 // that removes only that fraction of ln(density). only_moving non-empty (#V, 0/1): only those
 // vertices are advected, the others keep UV (the field is still that of the whole map; used to
 // slide the boundary alone, core/stretch_energy.h).
