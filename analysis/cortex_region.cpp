@@ -14,7 +14,7 @@ namespace authalic::analysis {
 CortexRegion read_cortex_region(const TriMesh& white, const std::string& white_path, const std::string& cortex_path,
                                 const std::string& name) {
   const int n = white.num_vertices();
-  const io::RegionFile file = io::read_region_file(cortex_path, n);
+  const io::RegionFile file = io::read_region_file(cortex_path, white);
   CortexRegion region;
   if (file.is_face_set) {
     if (file.face_set_vertices != n)

@@ -76,7 +76,7 @@ MatrixXi region_faces(const FlattenArgs& a, const io::Surface& surface, std::str
     return other.mesh.F;
   }
   if (!a.label.empty()) {
-    const std::vector<int> verts = io::read_region_vertices(a.label, nv);
+    const std::vector<int> verts = io::read_region_vertices(a.label, mesh);
     std::vector<bool> mask(nv, false);
     for (int v : verts) mask[v] = true;
     auto c = std::make_unique<RegionCleanup>(region_faces_from_vertices(mesh.V, mesh.F, mask));

@@ -135,7 +135,7 @@ analysis::Normalisation sample_normalisation(const SampleArgs& a, const io::Volu
   norm.description = "none: values in the PET's units";
   if (a.normalize == "global") {
     std::vector<bool> in_cortex(static_cast<std::size_t>(surface.mesh.num_vertices()), false);
-    for (int v : io::read_region_vertices(a.cortex, surface.mesh.num_vertices())) in_cortex[static_cast<std::size_t>(v)] = true;
+    for (int v : io::read_region_vertices(a.cortex, surface.mesh)) in_cortex[static_cast<std::size_t>(v)] = true;
     const Submesh cortex = submesh_from_vertices(TriMesh{V_world, surface.mesh.F}, in_cortex);
     if (cortex.mesh.F.rows() == 0)
       throw InputError(a.cortex + ": no triangle of " + a.surface + " has all its vertices in this region; give the cortex label of this surface");

@@ -328,7 +328,51 @@ void write_label_gifti(const std::string& path, const VectorXi& labels, const st
   detail::write_gifti_columns(path, labels.cast<double>(), options, 1002 /*NIFTI_INTENT_LABEL*/, &table);
 }
 
-std::vector<int> read_region_vertices(const std::string& path, int expected_vertices) {
+namespace {
+
+// Refused when the label's neighbours (on the surface) lie, as a median, more than this share of
+// the label's extent (RMS distance from its centroid) apart and more than kLabelNeighbourEdges of
+// the surface's median edge. Measured, as a share of the extent: labels made on the surface's mesh
+// 0.017 (fs741 lh.cortex.label on its white or pial surface) to 0.056 (fsaverage5's on its sphere;
+// 10k vertices); fsaverage5's label on fs741 0.76 (38 mm, 44 edges). The edge bound keeps a small
+// label (a few rings: its extent is a few edges) from being refused.
+constexpr double kLabelNeighbourSpread = 0.25;
+constexpr double kLabelNeighbourEdges = 5.0;  // a label drawn on the sphere: up to about 4 (fsaverage5)
+constexpr int kLabelMinEdges = 20;  // fewer neighbour pairs: too few to judge
+
+// See read_region_vertices(path, surface) in the header.
+void check_label_follows_surface(const std::string& path, const Label& label, const TriMesh& surface) {
+  const Eigen::Index n = surface.V.rows();
+  std::vector<int> row(static_cast<std::size_t>(n), -1);
+  for (std::size_t k = 0; k < label.vertices.size(); ++k) row[static_cast<std::size_t>(label.vertices[k])] = static_cast<int>(k);
+  const Eigen::RowVector3d centre = label.positions.colwise().mean();
+  const double extent = std::sqrt((label.positions.rowwise() - centre).rowwise().squaredNorm().mean());
+  if (!(extent > 0)) return;  // no coordinates stored
+  std::vector<double> apart, edge;
+  for (Eigen::Index f = 0; f < surface.F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int a = surface.F(f, c), b = surface.F(f, (c + 1) % 3);
+      if (a > b) continue;  // each interior edge once (from the face where it runs upward)
+      edge.push_back((surface.V.row(a) - surface.V.row(b)).norm());
+      if (row[static_cast<std::size_t>(a)] >= 0 && row[static_cast<std::size_t>(b)] >= 0)
+        apart.push_back((label.positions.row(row[static_cast<std::size_t>(a)]) - label.positions.row(row[static_cast<std::size_t>(b)])).norm());
+    }
+  if (apart.size() < static_cast<std::size_t>(kLabelMinEdges)) return;
+  auto median = [](std::vector<double>& x) {
+    std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2), x.end());
+    return x[x.size() / 2];
+  };
+  const double m = median(apart), e = median(edge);
+  if (m <= kLabelNeighbourSpread * extent || m <= kLabelNeighbourEdges * e) return;
+  std::ostringstream problem;
+  problem.precision(3);
+  problem << "the label's coordinates do not follow this surface's triangles: vertices that are neighbours on the surface lie a median "
+          << m << " mm apart in the label (" << 100 * m / extent << " % of its extent; about " << e
+          << " mm, one edge, for a label made on this mesh)";
+  fail(path, problem.str(), "it belongs to another mesh (another subject, hemisphere or resolution); use the label made for this surface");
+}
+
+std::vector<int> read_region_vertices_checked(const std::string& path, int expected_vertices, const TriMesh* surface) {
   const std::string bytes = detail::read_file(path);
   std::vector<int> vertices;
   if (detail::looks_like_freesurfer_label(bytes) || (!bytes.empty() && bytes[0] == '#' && ends_with(detail::lower_filename(path), ".label"))) {
@@ -339,6 +383,7 @@ std::vector<int> read_region_vertices(const std::string& path, int expected_vert
         if (v >= expected_vertices)
           fail(path, "label vertex " + std::to_string(v) + " is outside the surface's " + std::to_string(expected_vertices) + " vertices",
                "use the label that belongs to this surface");
+      if (surface) check_label_follows_surface(path, label, *surface);
     }
   } else {
     bool labels = false;
@@ -370,7 +415,7 @@ std::vector<int> read_region_vertices(const std::string& path, int expected_vert
   return vertices;
 }
 
-RegionFile read_region_file(const std::string& path, int expected_vertices) {
+RegionFile read_region_file_checked(const std::string& path, int expected_vertices, const TriMesh* surface) {
   const std::string bytes = detail::read_file(path);
   RegionFile r;
   switch (sniff_surface(bytes, path)) {
@@ -396,8 +441,26 @@ RegionFile read_region_file(const std::string& path, int expected_vertices) {
     }
     default: break;  // labels, masks, curv-style per-vertex files
   }
-  r.vertices = read_region_vertices(path, expected_vertices);
+  r.vertices = read_region_vertices_checked(path, expected_vertices, surface);
   return r;
+}
+
+}  // namespace
+
+std::vector<int> read_region_vertices(const std::string& path, int expected_vertices) {
+  return read_region_vertices_checked(path, expected_vertices, nullptr);
+}
+
+std::vector<int> read_region_vertices(const std::string& path, const TriMesh& surface) {
+  return read_region_vertices_checked(path, static_cast<int>(surface.V.rows()), &surface);
+}
+
+RegionFile read_region_file(const std::string& path, int expected_vertices) {
+  return read_region_file_checked(path, expected_vertices, nullptr);
+}
+
+RegionFile read_region_file(const std::string& path, const TriMesh& surface) {
+  return read_region_file_checked(path, static_cast<int>(surface.V.rows()), &surface);
 }
 
 Label read_freesurfer_label(const std::string& path) { return detail::parse_freesurfer_label(detail::read_file(path), path); }

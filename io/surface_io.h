@@ -104,6 +104,13 @@ void write_label_gifti(const std::string& path, const VectorXi& labels, const st
 // A cortex region given as vertices: FreeSurfer label file (lh.cortex.label), a GIFTI label
 // file (non-zero keys) or a GIFTI shape/func mask (values > 0.5). Indices are 0-based.
 std::vector<int> read_region_vertices(const std::string& path, int expected_vertices = -1);
+// The same, checked against the surface it is for: the vertex count, and a FreeSurfer label's
+// coordinates must follow the surface's triangles. The label stores each vertex's position on
+// the surface it was drawn on (white, pial, sphere: the same triangles), so vertices that are
+// neighbours on `surface` lie about one edge apart in the label. A label of another mesh whose
+// indices happen to be in range puts them tens of mm apart, and is refused (InputError).
+// Labels without coordinates (all rows at one point) are not checked.
+std::vector<int> read_region_vertices(const std::string& path, const TriMesh& surface);
 
 // A cortex region file of either kind, told apart by its content (not its name): a surface whose
 // triangles are the region (a face set on the same vertices, e.g. FreeSurfer's flat patch saved
@@ -116,6 +123,8 @@ struct RegionFile {
   std::vector<int> vertices;   // otherwise: sorted 0-based indices
 };
 RegionFile read_region_file(const std::string& path, int expected_vertices = -1);
+// The same, a label or mask checked against `surface` as read_region_vertices(path, surface) does.
+RegionFile read_region_file(const std::string& path, const TriMesh& surface);
 
 // FreeSurfer label file: vertex indices and their coordinates/values.
 struct Label {

@@ -224,3 +224,37 @@ TEST(RegionCli, PhantomFsaverage5CortexLabelIsOneDiskAfterCleanup) {
   EXPECT_EQ(r.label_vertices_outside, 0);
   EXPECT_LT(r.hole_area_mm2, 0.005 * r.area_mm2);
 }
+
+// fsaverage5's cortex (the vertices of flat_left's faces, with their white-surface coordinates, as
+// FreeSurfer writes a label) given for the native subject fs741: every index is in range (10242
+// of 150k vertices), but the label belongs to another mesh. Refused, naming the file; nothing
+// written. The subject's own label is read as before.
+TEST(RegionCli, FlattenRefusesTheLabelOfAnotherMesh) {
+  AUTHALIC_REQUIRE_SHARED(white5, "fsaverage5/white_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(flat5, "fsaverage5/flat_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(native, "fs741/lh.white.surf.gii");
+  AUTHALIC_REQUIRE_SHARED(native_label, "fs741/lh.cortex.label");
+  const TriMesh fs5 = io::read_surface(white5).mesh;
+  const MatrixXi cortex = io::read_surface(flat5).mesh.F;
+  std::vector<char> used(static_cast<std::size_t>(fs5.num_vertices()), 0);
+  for (Eigen::Index f = 0; f < cortex.rows(); ++f)
+    for (int c = 0; c < 3; ++c) used[static_cast<std::size_t>(cortex(f, c))] = 1;
+  io::Label l;
+  for (int v = 0; v < fs5.num_vertices(); ++v)
+    if (used[static_cast<std::size_t>(v)]) l.vertices.push_back(v);
+  l.positions.resize(static_cast<Eigen::Index>(l.vertices.size()), 3);
+  for (std::size_t i = 0; i < l.vertices.size(); ++i) l.positions.row(static_cast<Eigen::Index>(i)) = fs5.V.row(l.vertices[i]);
+  l.values = VectorXd::Zero(static_cast<Eigen::Index>(l.vertices.size()));
+  const std::string dir = test::temp_dir("region_cli_other_mesh");
+  io::write_freesurfer_label(dir + "/fsaverage5.cortex.label", l);
+  fs::create_directory(dir + "/out");
+  std::string out;
+  EXPECT_EQ(run_command(authalic_binary() + " flatten " + native + " " + dir + "/out/flat.surf.gii --label " + dir + "/fsaverage5.cortex.label", &out), 2)
+      << out;
+  EXPECT_NE(out.find("fsaverage5.cortex.label: the label's coordinates do not follow this surface's triangles"), std::string::npos) << out;
+  EXPECT_NE(out.find("belongs to another mesh"), std::string::npos) << out;
+  EXPECT_TRUE(fs::is_empty(dir + "/out")) << "nothing written";
+  // The native label passes the same check (the map itself is tested elsewhere).
+  EXPECT_EQ(io::read_region_vertices(native_label, io::read_surface(native).mesh).size(),
+            io::read_freesurfer_label(native_label).vertices.size());
+}

@@ -2,6 +2,8 @@
 // cross-checks against nibabel.freesurfer (an independent implementation of the same layouts).
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "io/io_test_util.h"
 #include "io/io_internal.h"
 #include "io/surface_formats.h"
@@ -171,6 +173,63 @@ TEST(FreeSurferLabel, RoundTripAndRegion) {
   const std::vector<double> nib_vertices =
       python_numbers(run_python(dir, "print('OUT:', *nib.freesurfer.read_label('" + dir + "/lh.cortex.label'))\n"));
   EXPECT_EQ(nib_vertices, (std::vector<double>{4, 0, 2}));
+}
+
+// A label stores positions on the surface it was drawn on. One of this mesh (drawn on its white
+// surface, or on a sphere with the same triangles) is read; one of another mesh whose indices
+// happen to be in range (here: the same points under another vertex numbering) is refused.
+TEST(FreeSurferLabel, ALabelOfAnotherMeshIsRefused) {
+  const std::string dir = temp_dir("fs_label_mesh");
+  constexpr int kSide = 24;  // a 24 x 24 grid of 1 mm squares, two triangles each
+  TriMesh grid;
+  grid.V.resize(kSide * kSide, 3);
+  grid.F.resize(2 * (kSide - 1) * (kSide - 1), 3);
+  for (int r = 0, f = 0; r < kSide; ++r)
+    for (int c = 0; c < kSide; ++c) {
+      grid.V.row(r * kSide + c) << c, r, 0;
+      if (r + 1 == kSide || c + 1 == kSide) continue;
+      const int a = r * kSide + c;
+      grid.F.row(f++) << a, a + 1, a + kSide + 1;
+      grid.F.row(f++) << a, a + kSide + 1, a + kSide;
+    }
+  Label own;
+  for (int v = 0; v < grid.V.rows(); v += 1 + v % 2) own.vertices.push_back(v);  // two thirds of the vertices
+  const Eigen::Index n = static_cast<Eigen::Index>(own.vertices.size());
+  own.positions.resize(n, 3);
+  own.values = VectorXd::Zero(n);
+  for (Eigen::Index k = 0; k < n; ++k) own.positions.row(k) = grid.V.row(own.vertices[static_cast<std::size_t>(k)]);
+  write_freesurfer_label(dir + "/own.label", own);
+  EXPECT_EQ(read_region_vertices(dir + "/own.label", grid).size(), static_cast<std::size_t>(n));
+
+  Label sphere = own;  // drawn on a sphere of radius 100 mm with the same triangles
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double lon = 0.02 * own.positions(k, 0), lat = 0.02 * own.positions(k, 1);
+    sphere.positions.row(k) << 100 * std::cos(lat) * std::cos(lon), 100 * std::cos(lat) * std::sin(lon), 100 * std::sin(lat);
+  }
+  write_freesurfer_label(dir + "/sphere.label", sphere);
+  EXPECT_EQ(read_region_vertices(dir + "/sphere.label", grid).size(), static_cast<std::size_t>(n));
+
+  Label small;  // a few rings around vertex (12, 12): its extent is a few edges
+  for (int r = 10; r <= 14; ++r)
+    for (int c = 10; c <= 14; ++c) small.vertices.push_back(r * kSide + c);
+  small.positions.resize(25, 3);
+  small.values = VectorXd::Zero(25);
+  for (Eigen::Index k = 0; k < 25; ++k) small.positions.row(k) = 3.0 * grid.V.row(small.vertices[static_cast<std::size_t>(k)]);
+  write_freesurfer_label(dir + "/small.label", small);  // drawn on a surface 3 x larger (a sphere)
+  EXPECT_EQ(read_region_vertices(dir + "/small.label", grid).size(), 25u);
+
+  Label bare = own;  // written without coordinates
+  bare.positions.setZero();
+  write_freesurfer_label(dir + "/bare.label", bare);
+  EXPECT_EQ(read_region_vertices(dir + "/bare.label", grid).size(), static_cast<std::size_t>(n));
+
+  Label other = own;  // another mesh: its vertex k is this mesh's vertex (37 k mod 576)
+  for (Eigen::Index k = 0; k < n; ++k) other.positions.row(k) = grid.V.row((37 * own.vertices[static_cast<std::size_t>(k)]) % (kSide * kSide));
+  write_freesurfer_label(dir + "/other.label", other);
+  expect_input_error([&] { read_region_vertices(dir + "/other.label", grid); }, dir + "/other.label", "another mesh");
+  expect_input_error([&] { read_region_file(dir + "/other.label", grid); }, dir + "/other.label", "do not follow this surface's triangles");
+  // Without the surface only the index range is checked.
+  EXPECT_EQ(read_region_vertices(dir + "/other.label", kSide * kSide).size(), static_cast<std::size_t>(n));
 }
 
 TEST(FreeSurferPatch, RoundTripAndPatchMesh) {
