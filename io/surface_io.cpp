@@ -348,22 +348,30 @@ void check_label_follows_surface(const std::string& path, const Label& label, co
   const Eigen::RowVector3d centre = label.positions.colwise().mean();
   const double extent = std::sqrt((label.positions.rowwise() - centre).rowwise().squaredNorm().mean());
   if (!(extent > 0)) return;  // no coordinates stored
-  std::vector<double> apart, edge;
-  for (Eigen::Index f = 0; f < surface.F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int a = surface.F(f, c), b = surface.F(f, (c + 1) % 3);
-      if (a > b) continue;  // each interior edge once (from the face where it runs upward)
-      edge.push_back((surface.V.row(a) - surface.V.row(b)).norm());
-      if (row[static_cast<std::size_t>(a)] >= 0 && row[static_cast<std::size_t>(b)] >= 0)
-        apart.push_back((label.positions.row(row[static_cast<std::size_t>(a)]) - label.positions.row(row[static_cast<std::size_t>(b)])).norm());
-    }
-  if (apart.size() < static_cast<std::size_t>(kLabelMinEdges)) return;
+  // Over the surface's edges (each interior edge once: from the face where it runs upward).
+  auto for_each_edge = [&](const auto& visit) {
+    for (Eigen::Index f = 0; f < surface.F.rows(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const int a = surface.F(f, c), b = surface.F(f, (c + 1) % 3);
+        if (a < b) visit(a, b);
+      }
+  };
   auto median = [](std::vector<double>& x) {
     std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2), x.end());
     return x[x.size() / 2];
   };
-  const double m = median(apart), e = median(edge);
-  if (m <= kLabelNeighbourSpread * extent || m <= kLabelNeighbourEdges * e) return;
+  std::vector<double> apart;
+  for_each_edge([&](int a, int b) {
+    const int ra = row[static_cast<std::size_t>(a)], rb = row[static_cast<std::size_t>(b)];
+    if (ra >= 0 && rb >= 0) apart.push_back((label.positions.row(ra) - label.positions.row(rb)).norm());
+  });
+  if (apart.size() < static_cast<std::size_t>(kLabelMinEdges)) return;
+  const double m = median(apart);
+  if (m <= kLabelNeighbourSpread * extent) return;  // the usual case: the surface's edges are not needed
+  std::vector<double> edge;
+  for_each_edge([&](int a, int b) { edge.push_back((surface.V.row(a) - surface.V.row(b)).norm()); });
+  const double e = median(edge);
+  if (m <= kLabelNeighbourEdges * e) return;
   std::ostringstream problem;
   problem.precision(3);
   problem << "the label's coordinates do not follow this surface's triangles: vertices that are neighbours on the surface lie a median "
@@ -372,8 +380,8 @@ void check_label_follows_surface(const std::string& path, const Label& label, co
   fail(path, problem.str(), "it belongs to another mesh (another subject, hemisphere or resolution); use the label made for this surface");
 }
 
-std::vector<int> read_region_vertices_checked(const std::string& path, int expected_vertices, const TriMesh* surface) {
-  const std::string bytes = detail::read_file(path);
+// The vertices of a region file's contents (bytes, read from path).
+std::vector<int> region_vertices(const std::string& bytes, const std::string& path, int expected_vertices, const TriMesh* surface) {
   std::vector<int> vertices;
   if (detail::looks_like_freesurfer_label(bytes) || (!bytes.empty() && bytes[0] == '#' && ends_with(detail::lower_filename(path), ".label"))) {
     const Label label = detail::parse_freesurfer_label(bytes, path);
@@ -441,18 +449,18 @@ RegionFile read_region_file_checked(const std::string& path, int expected_vertic
     }
     default: break;  // labels, masks, curv-style per-vertex files
   }
-  r.vertices = read_region_vertices_checked(path, expected_vertices, surface);
+  r.vertices = region_vertices(bytes, path, expected_vertices, surface);
   return r;
 }
 
 }  // namespace
 
 std::vector<int> read_region_vertices(const std::string& path, int expected_vertices) {
-  return read_region_vertices_checked(path, expected_vertices, nullptr);
+  return region_vertices(detail::read_file(path), path, expected_vertices, nullptr);
 }
 
 std::vector<int> read_region_vertices(const std::string& path, const TriMesh& surface) {
-  return read_region_vertices_checked(path, static_cast<int>(surface.V.rows()), &surface);
+  return region_vertices(detail::read_file(path), path, static_cast<int>(surface.V.rows()), &surface);
 }
 
 RegionFile read_region_file(const std::string& path, int expected_vertices) {
