@@ -9,6 +9,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/hard_meshes.h"
 #include "core/sparse_cholesky.h"
 
 using namespace authalic;
@@ -156,13 +157,7 @@ TEST(SpdSolver, MeshVertexOrderingOrdersTheSystemTheSameAheadOrAtTheAnalysis) {
   // triangulated (n + 2) x (n + 2) grid, its border fixed (no row).
   const int n = 330, m = n + 2;  // 108,900 unknowns: the CHOLMOD path
   const SparseMatrix A = grid_laplacian(n);
-  MatrixXi F(2 * (m - 1) * (m - 1), 3);
-  for (int j = 0, f = 0; j + 1 < m; ++j)
-    for (int i = 0; i + 1 < m; ++i) {
-      const int a = j * m + i, b = a + 1, c = a + m, d = c + 1;
-      F.row(f++) << a, b, d;
-      F.row(f++) << a, d, c;
-    }
+  const MatrixXi F = test::square_grid(m - 1).F;  // vertex j m + i at column i, row j
   std::vector<int> row_of_vertex(static_cast<std::size_t>(m * m), -1);
   for (int j = 1; j <= n; ++j)
     for (int i = 1; i <= n; ++i) row_of_vertex[static_cast<std::size_t>(j * m + i)] = (j - 1) * n + (i - 1);

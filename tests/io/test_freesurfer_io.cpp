@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "common/hard_meshes.h"
 #include "io/io_test_util.h"
 #include "io/io_internal.h"
 #include "io/surface_formats.h"
@@ -181,17 +182,8 @@ TEST(FreeSurferLabel, RoundTripAndRegion) {
 TEST(FreeSurferLabel, ALabelOfAnotherMeshIsRefused) {
   const std::string dir = temp_dir("fs_label_mesh");
   constexpr int kSide = 24;  // a 24 x 24 grid of 1 mm squares, two triangles each
-  TriMesh grid;
-  grid.V.resize(kSide * kSide, 3);
-  grid.F.resize(2 * (kSide - 1) * (kSide - 1), 3);
-  for (int r = 0, f = 0; r < kSide; ++r)
-    for (int c = 0; c < kSide; ++c) {
-      grid.V.row(r * kSide + c) << c, r, 0;
-      if (r + 1 == kSide || c + 1 == kSide) continue;
-      const int a = r * kSide + c;
-      grid.F.row(f++) << a, a + 1, a + kSide + 1;
-      grid.F.row(f++) << a, a + kSide + 1, a + kSide;
-    }
+  TriMesh grid = test::square_grid(kSide - 1);  // vertex r kSide + c at (c, r) mm
+  grid.V *= kSide - 1;
   Label own;
   for (int v = 0; v < grid.V.rows(); v += 1 + v % 2) own.vertices.push_back(v);  // two thirds of the vertices
   const Eigen::Index n = static_cast<Eigen::Index>(own.vertices.size());
