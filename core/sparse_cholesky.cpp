@@ -29,12 +29,17 @@ class OrderedCholmod : public Eigen::CholmodDecomposition<SparseMatrix> {
   }
 };
 
-// METIS keeps its random generator in process-global state: two orderings at once (the two
-// hemispheres' maps, made side by side by `run`) draw from one sequence and came out different
-// from run to run. One ordering at a time keeps every map independent of what else the process
-// does.
-std::mutex metis_mutex;
 }  // namespace
+
+std::mutex& metis_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+std::mutex& blas_mutex() {
+  static std::mutex m;
+  return m;
+}
 
 struct SpdSolver::Impl {
   OrderedCholmod cholmod;
@@ -52,8 +57,6 @@ SpdSolver::SpdSolver(SpdSolver&&) noexcept = default;
 SpdSolver& SpdSolver::operator=(SpdSolver&&) noexcept = default;
 
 namespace {
-constexpr Eigen::Index kSupernodalMinUnknowns = 250000;
-
 // BLAS in one thread: a threaded OpenBLAS (the pthread or OpenMP build, if that is the machine's
 // libblas) may block a factorisation differently for another thread count, and maps must not
 // depend on it (README: deterministic). The serial build, which scripts/install_deps.sh
@@ -113,7 +116,7 @@ std::vector<int> mesh_vertex_ordering(const MatrixXi& F, int num_vertices) {
   common.print = 0;
   bool ok;
   {
-    const std::lock_guard<std::mutex> lock(metis_mutex);
+    const std::lock_guard<std::mutex> lock(metis_mutex());
     ok = cholmod_metis(&view, nullptr, 0, 1, perm.data(), &common) != 0;
   }
   cholmod_finish(&common);
@@ -131,15 +134,15 @@ bool SpdSolver::compute(const SparseMatrix& A, const std::vector<int>* row_of_ve
     impl_->outer.clear();
     impl_->inner.clear();
   }
-  // Measured on fsaverage5 (2 cores): Eigen's simplicial LDLT is as fast or faster up to ~100k
-  // unknowns (the flow's local systems, benchmark B1's initial map); CHOLMOD with METIS wins above.
   // METIS only: CHOLMOD's default also tries AMD first, which costs more than it saves on surface
   // meshes (B3's 149k unknowns: AMD's analysis 0.08 s against 0.7 s, but lnz 9.4M against 6.6M
-  // and a factorisation of 1.3 s against 0.5 s). Supernodal above 250k unknowns, where OpenBLAS's
-  // dense kernels pay: S655's 585k unknowns (lnz 32M) refactorise in 2.9 s against 7.3 s
-  // simplicial; at 149k both take 0.5 s, and below simplicial needs no BLAS at all.
+  // and a factorisation of 1.3 s against 0.5 s). Supernodal: OpenBLAS's dense kernels pay from
+  // tens of thousands of unknowns (measured on a 2-core Xeon, one thread: B3's three
+  // factorisations 2.0 s simplicial against 0.8 s, the whole map 6.0 s against 5.3 s; S655's
+  // 585k unknowns refactorise in 2.9 s against 7.3 s; B1 subdivided once, 40k unknowns: the map
+  // 1.7 s against 1.3 s with Eigen's LDLᵀ). Below 20k LDLᵀ needs no ordering pass.
   impl_->use_fallback = A.rows() <= kSpdLdltMaxUnknowns;
-  impl_->cholmod.setMode(A.rows() > kSupernodalMinUnknowns ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
+  impl_->cholmod.setMode(Eigen::CholmodSupernodalLLt);
   if (!impl_->use_fallback) {
     single_threaded_blas();
     impl_->cholmod.cholmod().nmethods = 1;
@@ -151,10 +154,13 @@ bool SpdSolver::compute(const SparseMatrix& A, const std::vector<int>* row_of_ve
     if (!perm.empty()) {
       impl_->cholmod.analyze_with_ordering(A, perm);
     } else {
-      const std::lock_guard<std::mutex> lock(metis_mutex);
+      const std::lock_guard<std::mutex> lock(metis_mutex());
       impl_->cholmod.analyzePattern(A);
     }
-    if (impl_->cholmod.info() == Eigen::Success) impl_->cholmod.factorize(A);
+    if (impl_->cholmod.info() == Eigen::Success) {
+      const std::lock_guard<std::mutex> lock(blas_mutex());
+      impl_->cholmod.factorize(A);
+    }
     impl_->use_fallback = impl_->cholmod.info() != Eigen::Success;
   }
   if (impl_->use_fallback) impl_->fallback.compute(A);
@@ -166,10 +172,12 @@ bool SpdSolver::refactor(const SparseMatrix& A, const std::vector<int>* row_of_v
   // Same pattern as the last compute(): keep its ordering and symbolic analysis (METIS on a 150k
   // mesh costs as much as the numeric factorisation).
   if (!impl_->ok || !same_pattern(A, impl_->outer, impl_->inner)) return compute(A, row_of_vertex);
-  if (impl_->use_fallback)
+  if (impl_->use_fallback) {
     impl_->fallback.factorize(A);
-  else
+  } else {
+    const std::lock_guard<std::mutex> lock(blas_mutex());
     impl_->cholmod.factorize(A);
+  }
   impl_->ok = (impl_->use_fallback ? impl_->fallback.info() : impl_->cholmod.info()) == Eigen::Success;
   if (!impl_->ok && !impl_->use_fallback) return compute(A, row_of_vertex);  // not definite for CHOLMOD: LDLᵀ
   return impl_->ok;
@@ -179,6 +187,7 @@ bool SpdSolver::ok() const { return impl_->ok; }
 
 MatrixXd SpdSolver::solve(const MatrixXd& B) const {
   if (impl_->use_fallback) return impl_->fallback.solve(B);
+  const std::lock_guard<std::mutex> lock(blas_mutex());
   return impl_->cholmod.solve(B);
 }
 

@@ -1,19 +1,30 @@
 #pragma once
-// Sparse symmetric positive definite solves for the map cores: Eigen's simplicial LDLᵀ up to 100k
-// unknowns, CHOLMOD's simplicial Cholesky with nested-dissection (METIS) ordering above (falling
-// back to LDLᵀ if CHOLMOD reports the matrix not positive definite). No BLAS is involved, so results
-// do not depend on the OpenMP thread count or on which BLAS the machine has.
+// Sparse symmetric positive definite solves for the map cores: Eigen's simplicial LDLᵀ up to 20k
+// unknowns, CHOLMOD's supernodal Cholesky with nested-dissection (METIS) ordering above (falling
+// back to LDLᵀ if CHOLMOD reports the matrix not positive definite). BLAS runs in one thread, so
+// results do not depend on the OpenMP thread count.
 #include <future>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "core/mesh.h"
 
 namespace authalic {
 
+// Locks for the libraries under CHOLMOD, which keep process-wide state. Hold metis_mutex() for
+// any CHOLMOD analysis that may order with METIS (its random generator is global: two orderings
+// at once came out different from run to run), and blas_mutex() for any supernodal
+// factorisation or solve: Debian's serial OpenBLAS shares its work buffers between callers, so
+// two supernodal solves on one factor run side by side came out different from the same solves
+// one after the other (the two hemispheres of `run` are mapped side by side). SpdSolver takes
+// them itself.
+std::mutex& metis_mutex();
+std::mutex& blas_mutex();
+
 // Up to this many unknowns SpdSolver factorises with Eigen's LDLᵀ (cheap: 10 ms at 10k), above
 // with CHOLMOD.
-inline constexpr Eigen::Index kSpdLdltMaxUnknowns = 100000;
+inline constexpr Eigen::Index kSpdLdltMaxUnknowns = 20000;
 
 // Nested-dissection ordering (METIS, through CHOLMOD) of a mesh's vertices by its edges: the
 // vertex ids, first eliminated first (vertices F does not use come last). It orders any system

@@ -457,7 +457,10 @@ class SphereBackground {
     SparseMatrix K = (-L).bottomRightCorner(nv - 1, nv - 1);
     K.makeCompressed();
     solver = std::make_unique<Eigen::CholmodSimplicialLDLT<SparseMatrix>>();
-    solver->compute(K);
+    {
+      const std::lock_guard<std::mutex> ordering(metis_mutex());  // CHOLMOD's default may try METIS
+      solver->compute(K);
+    }
     if (solver->info() != Eigen::Success) throw ProcessingError("sphere flow: the background Laplacian could not be factorised");
     mean_edge = std::sqrt(4.0 * face_area.mean() / std::sqrt(3.0));
   }
