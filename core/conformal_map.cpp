@@ -49,15 +49,21 @@ int flip_dividing_edges(const std::vector<Eigen::Vector3d>& pos, const std::vect
   const int n = static_cast<int>(pos.size());
   int flipped = 0;
   for (int round = 0; round < 4; ++round) {
-    std::vector<std::vector<int>> adj(n);
-    for (Eigen::Index e = 0; e < topo.E.rows(); ++e) {
-      adj[topo.E(e, 0)].push_back(topo.E(e, 1));
-      adj[topo.E(e, 1)].push_back(topo.E(e, 0));
-    }
     std::vector<std::pair<int, int>> added;
+    // An edge of the round's start (topo.E's rows are in ascending order: a binary search) or
+    // one a flip of this round added.
     auto is_edge = [&](int p, int q) {
-      if (std::find(adj[p].begin(), adj[p].end(), q) != adj[p].end()) return true;
-      return std::find(added.begin(), added.end(), std::pair<int, int>(std::minmax(p, q))) != added.end();
+      const std::pair<int, int> pq = std::minmax(p, q);
+      Eigen::Index lo = 0, hi = topo.E.rows();
+      while (lo < hi) {
+        const Eigen::Index mid = (lo + hi) / 2;
+        if (std::pair<int, int>(topo.E(mid, 0), topo.E(mid, 1)) < pq)
+          lo = mid + 1;
+        else
+          hi = mid;
+      }
+      if (lo < topo.E.rows() && topo.E(lo, 0) == pq.first && topo.E(lo, 1) == pq.second) return true;
+      return std::find(added.begin(), added.end(), pq) != added.end();
     };
     std::vector<char> touched(F.rows(), 0);
     int this_round = 0;
@@ -271,7 +277,7 @@ std::vector<int> disk_boundary_loop(const MatrixXd& V, const MatrixXi& F) {
   int nused = 0;
   for (char u : used) nused += u;
   bool manifold = true;
-  for (const auto& ef : et.edge_faces) manifold = manifold && ef.size() <= 2;
+  for (std::size_t e = 0; e < et.edge_faces.size(); ++e) manifold = manifold && et.edge_faces[static_cast<Eigen::Index>(e)].size() <= 2;
   if (loops.size() != 1 || !manifold || nused - et.E.rows() + F.rows() != 1) {
     const TopologyReport topo = analyze_topology(V, F);
     if (!topo.is_disk()) throw std::invalid_argument("conformal_rectangle_map: the mesh is not a disk (" + topo.summary() + ")");

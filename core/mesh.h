@@ -48,11 +48,48 @@ MatrixXd corner_angles(const MatrixXd& V, const MatrixXi& F);
 
 // ---- connectivity and topology (core/topology.cpp) --------------------------------------
 
+// The faces of each edge, stored flat (one array for all edges, not one allocation per edge):
+// lists[e] is edge e's faces in ascending order, one on the boundary, two inside, more at a
+// non-manifold edge.
+class EdgeFaceLists {
+ public:
+  class List {
+   public:
+    List(const int* first, const int* last) : first_(first), last_(last) {}
+    std::size_t size() const { return static_cast<std::size_t>(last_ - first_); }
+    int operator[](std::size_t i) const { return first_[i]; }
+    const int* begin() const { return first_; }
+    const int* end() const { return last_; }
+
+   private:
+    const int* first_;
+    const int* last_;
+  };
+  List operator[](Eigen::Index e) const {
+    return {faces_.data() + start_[static_cast<std::size_t>(e)], faces_.data() + start_[static_cast<std::size_t>(e) + 1]};
+  }
+  std::size_t size() const { return start_.size() - 1; }
+  // Building, edge by edge: begin_edge(), then add_face() for each of its faces.
+  void reserve(std::size_t edges, std::size_t entries) {
+    start_.reserve(edges + 1);
+    faces_.reserve(entries);
+  }
+  void begin_edge() { start_.push_back(start_.back()); }
+  void add_face(int f) {
+    faces_.push_back(f);
+    ++start_.back();
+  }
+
+ private:
+  std::vector<int> start_{0};  // edge e's faces: faces_[start_[e] .. start_[e + 1])
+  std::vector<int> faces_;
+};
+
 // Undirected edges with their incident faces. Built once, read many times.
 struct EdgeTopology {
-  MatrixXi E;                     // #E x 2, E(e,0) < E(e,1)
-  std::vector<std::vector<int>> edge_faces;  // faces incident to each edge
-  MatrixXi FE;                    // #F x 3: FE(f,c) = edge opposite corner c, i.e. (F(f,c+1), F(f,c+2))
+  MatrixXi E;                // #E x 2, E(e,0) < E(e,1), rows in ascending (E(e,0), E(e,1)) order
+  EdgeFaceLists edge_faces;  // faces incident to each edge
+  MatrixXi FE;               // #F x 3: FE(f,c) = edge opposite corner c, i.e. (F(f,c+1), F(f,c+2))
 };
 EdgeTopology edge_topology(const MatrixXi& F, int num_vertices);
 

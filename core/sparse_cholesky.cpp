@@ -1,6 +1,7 @@
 #include "core/sparse_cholesky.h"
 
 #include <dlfcn.h>
+#include <omp.h>
 
 #include <Eigen/CholmodSupport>
 #include <algorithm>
@@ -40,6 +41,9 @@ std::mutex& blas_mutex() {
   static std::mutex m;
   return m;
 }
+
+BlasCall::BlasCall() : lock_(blas_mutex()), saved_levels_(omp_get_max_active_levels()) { omp_set_max_active_levels(0); }
+BlasCall::~BlasCall() { omp_set_max_active_levels(saved_levels_); }
 
 struct SpdSolver::Impl {
   OrderedCholmod cholmod;
@@ -158,7 +162,7 @@ bool SpdSolver::compute(const SparseMatrix& A, const std::vector<int>* row_of_ve
       impl_->cholmod.analyzePattern(A);
     }
     if (impl_->cholmod.info() == Eigen::Success) {
-      const std::lock_guard<std::mutex> lock(blas_mutex());
+      const BlasCall call;
       impl_->cholmod.factorize(A);
     }
     impl_->use_fallback = impl_->cholmod.info() != Eigen::Success;
@@ -175,7 +179,7 @@ bool SpdSolver::refactor(const SparseMatrix& A, const std::vector<int>* row_of_v
   if (impl_->use_fallback) {
     impl_->fallback.factorize(A);
   } else {
-    const std::lock_guard<std::mutex> lock(blas_mutex());
+    const BlasCall call;
     impl_->cholmod.factorize(A);
   }
   impl_->ok = (impl_->use_fallback ? impl_->fallback.info() : impl_->cholmod.info()) == Eigen::Success;
@@ -187,7 +191,7 @@ bool SpdSolver::ok() const { return impl_->ok; }
 
 MatrixXd SpdSolver::solve(const MatrixXd& B) const {
   if (impl_->use_fallback) return impl_->fallback.solve(B);
-  const std::lock_guard<std::mutex> lock(blas_mutex());
+  const BlasCall call;
   return impl_->cholmod.solve(B);
 }
 

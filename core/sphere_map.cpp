@@ -63,7 +63,7 @@ HakerConformalSolver::HakerConformalSolver(const MatrixXd& V, const MatrixXi& F)
     impl_->solver.analyzePattern(K);
   }
   if (impl_->solver.info() == Eigen::Success) {
-    const std::lock_guard<std::mutex> blas(blas_mutex());
+    const BlasCall call;
     impl_->solver.factorize(K);
   }
   if (impl_->solver.info() != Eigen::Success)
@@ -98,7 +98,7 @@ MatrixXd HakerConformalSolver::planar_map(int puncture_face) const {
   rhs.col(1) = -b.tail(n - 1);
   MatrixXd sol;
   {
-    const std::lock_guard<std::mutex> blas(blas_mutex());
+    const BlasCall call;
     sol = impl_->solver.solve(rhs);
   }
   MatrixXd Z(n, 2);

@@ -81,15 +81,15 @@ EdgeTopology edge_topology(const MatrixXi& F, int num_vertices) {
   t.FE.resize(F.rows(), 3);
   std::vector<std::pair<int, int>> edges;
   edges.reserve(he.items.size() / 2 + 1);
-  t.edge_faces.reserve(he.items.size() / 2 + 1);
+  t.edge_faces.reserve(he.items.size() / 2 + 1, he.items.size());
   for (std::size_t i = 0; i < he.items.size();) {
     std::size_t j = i;
     const int a = he.items[i][0], b = he.items[i][1];
     const int e = static_cast<int>(edges.size());
     edges.emplace_back(a, b);
-    t.edge_faces.emplace_back();
+    t.edge_faces.begin_edge();
     for (; j < he.items.size() && he.items[j][0] == a && he.items[j][1] == b; ++j) {
-      t.edge_faces.back().push_back(he.items[j][2]);
+      t.edge_faces.add_face(he.items[j][2]);
       t.FE(he.items[j][2], he.items[j][3]) = e;
     }
     i = j;
@@ -129,10 +129,12 @@ std::vector<std::vector<int>> vertex_neighbours(const MatrixXi& F, Eigen::Index 
   return adj;
 }
 
-std::vector<std::vector<int>> boundary_loops(const MatrixXi& F, int num_vertices) {
+namespace {
+
+// boundary_loops with the directed half-edges already bucketed.
+std::vector<std::vector<int>> boundary_loops_of(const MatrixXi& F, int num_vertices, const DirectedEdges& d) {
   // A boundary half-edge a->b has no opposite b->a; its face lies on its left, so following the
   // half-edges themselves walks each loop with the interior on the left.
-  const DirectedEdges d(F, num_vertices);
   std::vector<std::vector<int>> next_of(num_vertices);  // boundary half-edge targets from each vertex
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int c = 0; c < 3; ++c) {
@@ -160,6 +162,12 @@ std::vector<std::vector<int>> boundary_loops(const MatrixXi& F, int num_vertices
   return loops;
 }
 
+}  // namespace
+
+std::vector<std::vector<int>> boundary_loops(const MatrixXi& F, int num_vertices) {
+  return boundary_loops_of(F, num_vertices, DirectedEdges(F, num_vertices));
+}
+
 VectorXi face_components(const MatrixXi& F, int num_vertices, int* num_components) {
   UnionFind uf(num_vertices);
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
@@ -167,14 +175,14 @@ VectorXi face_components(const MatrixXi& F, int num_vertices, int* num_component
     uf.unite(F(f, 0), F(f, 2));
   }
   VectorXi comp(F.rows());
-  std::unordered_map<int, int> id;
+  std::vector<int> id(static_cast<std::size_t>(num_vertices), -1);  // per root: its component, in order of first face
+  int count = 0;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const int r = uf.find(F(f, 0));
-    auto it = id.find(r);
-    if (it == id.end()) it = id.emplace(r, static_cast<int>(id.size())).first;
-    comp[f] = it->second;
+    int& c = id[static_cast<std::size_t>(uf.find(F(f, 0)))];
+    if (c < 0) c = count++;
+    comp[f] = c;
   }
-  if (num_components) *num_components = static_cast<int>(id.size());
+  if (num_components) *num_components = count;
   return comp;
 }
 
@@ -309,7 +317,7 @@ TopologyReport analyze_topology(const MatrixXd& V, const MatrixXi& F) {
     return -1;
   };
   for (Eigen::Index e = 0; e < t.E.rows(); ++e) {
-    const auto& fs = t.edge_faces[e];
+    const auto fs = t.edge_faces[e];
     if (fs.size() > 2) {
       ++r.non_manifold_edges;
       continue;
@@ -348,7 +356,7 @@ TopologyReport analyze_topology(const MatrixXd& V, const MatrixXi& F) {
   for (int v = 0; v < n; ++v)
     if (vcomp[v] >= 0) ++cv[vcomp[v]];
   for (Eigen::Index e = 0; e < t.E.rows(); ++e) ++ce[vcomp[t.E(e, 0)]];
-  const auto loops = boundary_loops(F, n);
+  const auto loops = boundary_loops_of(F, n, d);
   r.num_boundary_loops = static_cast<int>(loops.size());
   for (const auto& loop : loops)
     if (!loop.empty()) ++cb[vcomp[loop.front()]];
