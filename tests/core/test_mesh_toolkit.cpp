@@ -1,7 +1,10 @@
 // Mesh toolkit: known answers on small meshes (tetrahedron, square patch, torus, cylinder).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "core/mesh.h"
 
@@ -185,6 +188,35 @@ TEST(Topology, DetectsComponentsNonManifoldAndOrientation) {
   EXPECT_EQ(orient_faces_consistently(m.F, m.num_vertices()), 1);
   EXPECT_TRUE(analyze_topology(m.V, m.F).is_oriented());
   EXPECT_TRUE((signed_face_areas_2d(m.V, m.F).array() > 0).all());
+}
+
+TEST(Topology, EdgeFacesKnownAnswerWithAFinAndABoundary) {
+  // The fin of three triangles on edge (0,1) plus a fourth triangle on edge (1,2): every edge's
+  // faces, ascending, from the flat lists; edges in ascending (smaller, larger) order; FE names
+  // the edge opposite each corner.
+  MatrixXi F(4, 3);
+  F << 0, 1, 2, 1, 0, 3, 0, 1, 4, 2, 1, 5;
+  const EdgeTopology t = edge_topology(F, 6);
+  const std::vector<std::pair<std::pair<int, int>, std::vector<int>>> expected = {
+      {{0, 1}, {0, 1, 2}}, {{0, 2}, {0}}, {{0, 3}, {1}}, {{0, 4}, {2}}, {{1, 2}, {0, 3}},
+      {{1, 3}, {1}},       {{1, 4}, {2}}, {{1, 5}, {3}}, {{2, 5}, {3}}};
+  ASSERT_EQ(t.E.rows(), static_cast<Eigen::Index>(expected.size()));
+  ASSERT_EQ(t.edge_faces.size(), expected.size());
+  for (std::size_t e = 0; e < expected.size(); ++e) {
+    const auto ei = static_cast<Eigen::Index>(e);
+    EXPECT_EQ(t.E(ei, 0), expected[e].first.first) << "edge " << e;
+    EXPECT_EQ(t.E(ei, 1), expected[e].first.second) << "edge " << e;
+    const auto faces = t.edge_faces[ei];
+    EXPECT_EQ(std::vector<int>(faces.begin(), faces.end()), expected[e].second) << "edge " << e;
+  }
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int e = t.FE(f, c);
+      const int a = F(f, (c + 1) % 3), b = F(f, (c + 2) % 3);
+      EXPECT_EQ(t.E(e, 0), std::min(a, b));
+      EXPECT_EQ(t.E(e, 1), std::max(a, b));
+    }
+  EXPECT_EQ(analyze_topology(MatrixXd::Random(6, 3), F).non_manifold_edges, 1);
 }
 
 TEST(Topology, DuplicateVerticesAndDegenerateFaces) {
