@@ -440,7 +440,9 @@ void run(const FlattenArgs& a) {
   const TriMesh& mesh = surface.mesh;
   const FlattenRegion region = read_region(a, surface);
   check_region_size(a, region.F);
-  const SquareMapOptions options = square_map_options(a, mesh);
+  SquareMapOptions options = square_map_options(a, mesh);
+  // A label's cleanup has measured the region's topology: the map need not measure it again.
+  if (region.cleanup) options.region_topology = region.cleanup->topology;
 
   SquareMapResult r;
   StageClock clock(terminal_progress());
