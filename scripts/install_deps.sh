@@ -6,7 +6,7 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libsuitesparse-dev libvtk9-dev libinsighttoolkit5-dev
-  libopenblas0-serial                      # the BLAS under CHOLMOD's supernodal factorisations (250k+ unknowns); serial: no threads
+  libopenblas0-serial                      # the BLAS under CHOLMOD's supernodal factorisations (20k+ unknowns); serial: no threads
   libnifti2-dev libgiftiio-dev zlib1g-dev libpng-dev libssl-dev libexpat1-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev libcsv-dev
   python3 python3-nibabel python3-numpy python3-scipy
