@@ -138,28 +138,37 @@ bool SpdSolver::compute(const SparseMatrix& A, const std::vector<int>* row_of_ve
     impl_->outer.clear();
     impl_->inner.clear();
   }
-  // METIS only: CHOLMOD's default also tries AMD first, which costs more than it saves on surface
-  // meshes (B3's 149k unknowns: AMD's analysis 0.08 s against 0.7 s, but lnz 9.4M against 6.6M
-  // and a factorisation of 1.3 s against 0.5 s). Supernodal: OpenBLAS's dense kernels pay from
-  // tens of thousands of unknowns (measured on a 2-core Xeon, one thread: B3's three
-  // factorisations 2.0 s simplicial against 0.8 s, the whole map 6.0 s against 5.3 s; S655's
-  // 585k unknowns refactorise in 2.9 s against 7.3 s; B1 subdivided once, 40k unknowns: the map
-  // 1.7 s against 1.3 s with Eigen's LDLᵀ). Below 20k Eigen's LDLᵀ stays (its own AMD ordering, no
-  // METIS pass; about 10 ms at 10k unknowns).
+  // One ordering, chosen by size (CHOLMOD's default tries AMD, then METIS when AMD's fill is
+  // large: both analyses). Measured in the maps, one thread, supernodal (B3: 149k unknowns,
+  // three factorisations and 29 solves; fs741 R1 148k, four and 30; B600 585k, four and 38):
+  //   AMD:   analysis 0.09 / 0.14 / 0.52 s, factorisations 1.10 / 0.80 / 12.6 s, solves 1.04 /
+  //          0.76 / 6.3 s, B600 peak 1.36 GB;
+  //   METIS: analysis 0.90 / 1.10 / 4.6 s, factorisations 0.97 / 0.89 / 6.1 s, solves 0.84 /
+  //          0.72 / 5.1 s, B600 peak 1.22 GB.
+  // AMD's larger fill costs little while the supernodes are small (and its columns' bigger
+  // supernodes suit the BLAS), and it needs no mutex (METIS's generator is global); at 600k its
+  // fill doubles the factorisations. (Simplicial, AMD lost at 150k too: 1.3 s against 0.5 s.)
+  // Supernodal: OpenBLAS's dense kernels pay from tens of thousands of unknowns (B3's three
+  // factorisations 2.0 s simplicial against 0.8 s; S655's 585k unknowns refactorise in 2.9 s
+  // against 7.3 s; B1 subdivided once, 40k unknowns: the map 1.7 s against 1.3 s with Eigen's
+  // LDLᵀ). Below 20k Eigen's LDLᵀ stays (its own AMD ordering; about 10 ms at 10k unknowns).
   impl_->use_fallback = A.rows() <= kSpdLdltMaxUnknowns;
   impl_->cholmod.setMode(Eigen::CholmodSupernodalLLt);
   if (!impl_->use_fallback) {
     single_threaded_blas();
+    const bool metis = A.rows() > kSpdMetisMinUnknowns;
     impl_->cholmod.cholmod().nmethods = 1;
-    impl_->cholmod.cholmod().method[0].ordering = CHOLMOD_METIS;
+    impl_->cholmod.cholmod().method[0].ordering = metis ? CHOLMOD_METIS : CHOLMOD_AMD;
     impl_->cholmod.cholmod().print = 0;  // quiet: a non-definite matrix falls back below
     std::vector<int> perm;
-    if (row_of_vertex && impl_->vertex_order.valid() && !impl_->vertex_order.get().empty())
+    if (metis && row_of_vertex && impl_->vertex_order.valid() && !impl_->vertex_order.get().empty())
       perm = rows_in_vertex_order(impl_->vertex_order.get(), *row_of_vertex, A.rows());
     if (!perm.empty()) {
       impl_->cholmod.analyze_with_ordering(A, perm);
-    } else {
+    } else if (metis) {
       const std::lock_guard<std::mutex> lock(metis_mutex());
+      impl_->cholmod.analyzePattern(A);
+    } else {
       impl_->cholmod.analyzePattern(A);
     }
     if (impl_->cholmod.info() == Eigen::Success) {

@@ -1,7 +1,8 @@
 #pragma once
 // Sparse symmetric positive definite solves for the map cores: Eigen's simplicial LDLᵀ up to 20k
-// unknowns, CHOLMOD's supernodal Cholesky with nested-dissection (METIS) ordering above (falling
-// back to LDLᵀ if CHOLMOD reports the matrix not positive definite). BLAS runs in one thread, so
+// unknowns, CHOLMOD's supernodal Cholesky above, ordered by AMD up to 250k unknowns and by nested
+// dissection (METIS) beyond (falling back to LDLᵀ if CHOLMOD reports the matrix not positive
+// definite). BLAS runs in one thread, so
 // results do not depend on the OpenMP thread count.
 #include <future>
 #include <memory>
@@ -42,6 +43,9 @@ class BlasCall {
 // Up to this many unknowns SpdSolver factorises with Eigen's LDLᵀ (cheap: 10 ms at 10k), above
 // with CHOLMOD.
 inline constexpr Eigen::Index kSpdLdltMaxUnknowns = 20000;
+// CHOLMOD orders systems of up to this many unknowns with AMD, larger ones with METIS (nested
+// dissection), whose smaller fill pays for its slower analysis only on large meshes.
+inline constexpr Eigen::Index kSpdMetisMinUnknowns = 250000;
 
 // Nested-dissection ordering (METIS, through CHOLMOD) of a mesh's vertices by its edges: the
 // vertex ids, first eliminated first (vertices F does not use come last). It orders any system

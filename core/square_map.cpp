@@ -136,14 +136,13 @@ FlowResult refine_by_optimal_transport(const ConformalMapResult& init, const Vec
 
 namespace {
 
-// The conformal map's and the stretch energy's systems, of more than kSpdLdltMaxUnknowns rows,
+// The conformal map's and the stretch energy's systems, of more than kSpdMetisMinUnknowns rows,
 // are ordered by METIS on the region's vertices (mesh_vertex_ordering) instead of on the first
 // system: the faces are known before the region is checked, the boundary placed and the system
-// assembled, so with more than one thread the ordering runs beside all that (B3, one thread:
-// METIS 0.85 s; the checks 0.34 s, the boundary placement and edge splits 0.45 s). Computed the
-// same way with one thread, so the map does not depend on the count.
+// assembled, so with more than one thread the ordering runs beside all that (B600, one thread:
+// METIS 4.6 s). Computed the same way with one thread, so the map does not depend on the count.
 void order_by_mesh(const MatrixXi& F, int num_vertices, SpdSolver& solver) {
-  if ((F.rows() + 2) / 2 <= kSpdLdltMaxUnknowns) return;  // LDLᵀ orders small systems itself
+  if ((F.rows() + 2) / 2 <= kSpdMetisMinUnknowns) return;  // AMD (or LDLᵀ) orders smaller systems at their analysis
   if (F.minCoeff() < 0 || F.maxCoeff() >= num_vertices) return;  // not checked yet: the checks below refuse it
   const auto policy = omp_get_max_threads() > 1 ? std::launch::async : std::launch::deferred;
   solver.order_by_vertices(std::async(policy, mesh_vertex_ordering, F, num_vertices).share());

@@ -56,8 +56,9 @@ SparseMatrix grid_laplacian(int n, double phase = 0) {
 }  // namespace
 
 TEST(SpdSolver, RefactorReusesTheAnalysisAndSolvesTheNewValues) {
-  // Eigen's LDLT up to 20k unknowns, CHOLMOD's supernodal factorisation (through the BLAS) above.
-  for (int n : {500, 120000}) {
+  // Eigen's LDLT up to 20k unknowns, CHOLMOD's supernodal factorisation (through the BLAS) above,
+  // ordered by AMD up to 250k and by METIS beyond: all three exercised.
+  for (int n : {500, 120000, 260000}) {
     const MatrixXd b = MatrixXd::Ones(n, 2);
     SpdSolver solver;
     ASSERT_TRUE(solver.refactor(path_laplacian(n, 1.0, 0.1)));  // first call computes
@@ -139,25 +140,28 @@ TEST(SpdSolver, TwoSolversAtOnceGiveTheBitsOfOne) {
   // (two analyses at once drew from one sequence: other orderings, and maps differing by up to
   // 0.05 mm on fs741), and the serial OpenBLAS shares its work buffers between callers (two
   // supernodal solves at once on one factor gave other numbers than the same solves in turn).
-  const SparseMatrix A = grid_laplacian(160);  // 25,600 unknowns: CHOLMOD, supernodal
-  MatrixXd b(A.rows(), 2);
-  for (Eigen::Index i = 0; i < b.rows(); ++i) b(i, 0) = std::sin(0.37 * i), b(i, 1) = 1.0 + 0.1 * std::cos(0.11 * i);
-  const MatrixXd alone = SpdSolver(A).solve(b);
-  ASSERT_LT(residual(A, alone, b), 1e-10);
-  const SpdSolver shared(A);
-  for (int round = 0; round < 3; ++round) {
-    MatrixXd x[2], y[2];
-    // Each thread: its own analysis and factorisation, then many solves with the shared factor.
-    auto work = [&](int k) {
-      x[k] = SpdSolver(A).solve(b);
-      for (int rep = 0; rep < 20; ++rep) y[k] = shared.solve(b);
-    };
-    std::thread other(work, 1);
-    work(0);
-    other.join();
-    for (int k = 0; k < 2; ++k) {
-      EXPECT_EQ((x[k] - alone).cwiseAbs().maxCoeff(), 0.0) << "round " << round << ", thread " << k;
-      EXPECT_EQ((y[k] - alone).cwiseAbs().maxCoeff(), 0.0) << "round " << round << ", thread " << k;
+  for (int n : {160, 510}) {  // 25,600 unknowns (AMD) and 260,100 (METIS): CHOLMOD, supernodal
+    const SparseMatrix A = grid_laplacian(n);
+    MatrixXd b(A.rows(), 2);
+    for (Eigen::Index i = 0; i < b.rows(); ++i) b(i, 0) = std::sin(0.37 * i), b(i, 1) = 1.0 + 0.1 * std::cos(0.11 * i);
+    const MatrixXd alone = SpdSolver(A).solve(b);
+    ASSERT_LT(residual(A, alone, b), 1e-10);
+    const SpdSolver shared(A);
+    const int rounds = n > 200 ? 1 : 3;
+    for (int round = 0; round < rounds; ++round) {
+      MatrixXd x[2], y[2];
+      // Each thread: its own analysis and factorisation, then many solves with the shared factor.
+      auto work = [&](int k) {
+        x[k] = SpdSolver(A).solve(b);
+        for (int rep = 0; rep < 20; ++rep) y[k] = shared.solve(b);
+      };
+      std::thread other(work, 1);
+      work(0);
+      other.join();
+      for (int k = 0; k < 2; ++k) {
+        EXPECT_EQ((x[k] - alone).cwiseAbs().maxCoeff(), 0.0) << "n " << n << ", round " << round << ", thread " << k;
+        EXPECT_EQ((y[k] - alone).cwiseAbs().maxCoeff(), 0.0) << "n " << n << ", round " << round << ", thread " << k;
+      }
     }
   }
 }
@@ -166,7 +170,7 @@ TEST(SpdSolver, MeshVertexOrderingOrdersTheSystemTheSameAheadOrAtTheAnalysis) {
   // The square map orders its systems by METIS on the region's mesh (mesh_vertex_ordering), ahead
   // of the analysis when it has a second thread: the unknowns are the n x n interior vertices of a
   // triangulated (n + 2) x (n + 2) grid, its border fixed (no row).
-  const int n = 330, m = n + 2;  // 108,900 unknowns: the CHOLMOD path
+  const int n = 510, m = n + 2;  // 260,100 unknowns: CHOLMOD with METIS
   const SparseMatrix A = grid_laplacian(n);
   const MatrixXi F = test::square_grid(m - 1).F;  // vertex j m + i at column i, row j
   std::vector<int> row_of_vertex(static_cast<std::size_t>(m * m), -1);
