@@ -165,10 +165,9 @@ bool SpdSolver::compute(const SparseMatrix& A, const std::vector<int>* row_of_ve
       perm = rows_in_vertex_order(impl_->vertex_order.get(), *row_of_vertex, A.rows());
     if (!perm.empty()) {
       impl_->cholmod.analyze_with_ordering(A, perm);
-    } else if (metis) {
-      const std::lock_guard<std::mutex> lock(metis_mutex());
-      impl_->cholmod.analyzePattern(A);
     } else {
+      std::unique_lock<std::mutex> lock(metis_mutex(), std::defer_lock);  // AMD keeps no global state
+      if (metis) lock.lock();
       impl_->cholmod.analyzePattern(A);
     }
     if (impl_->cholmod.info() == Eigen::Success) {
@@ -183,8 +182,8 @@ bool SpdSolver::compute(const SparseMatrix& A, const std::vector<int>* row_of_ve
 }
 
 bool SpdSolver::refactor(const SparseMatrix& A, const std::vector<int>* row_of_vertex) {
-  // Same pattern as the last compute(): keep its ordering and symbolic analysis (METIS on a 150k
-  // mesh costs as much as the numeric factorisation).
+  // Same pattern as the last compute(): keep its ordering and symbolic analysis (METIS on a 600k
+  // mesh costs almost as much as three numeric factorisations).
   if (!impl_->ok || !same_pattern(A, impl_->outer, impl_->inner)) return compute(A, row_of_vertex);
   if (impl_->use_fallback) {
     impl_->fallback.factorize(A);

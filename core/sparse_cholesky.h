@@ -2,8 +2,7 @@
 // Sparse symmetric positive definite solves for the map cores: Eigen's simplicial LDLᵀ up to 20k
 // unknowns, CHOLMOD's supernodal Cholesky above, ordered by AMD up to 250k unknowns and by nested
 // dissection (METIS) beyond (falling back to LDLᵀ if CHOLMOD reports the matrix not positive
-// definite). BLAS runs in one thread, so
-// results do not depend on the OpenMP thread count.
+// definite). BLAS runs in one thread, so results do not depend on the OpenMP thread count.
 #include <future>
 #include <memory>
 #include <mutex>
