@@ -200,7 +200,7 @@ int polish_disk_face_areas(MatrixXd& D, const MatrixXi& F, const VectorXd& targe
         << ", per-vertex mean " << cur_vertex;
     report(progress, "disk", -1, msg.str());
     slow_in_a_row = cur > 0.99 * before ? slow_in_a_row + 1 : 0;
-    if (slow_in_a_row == 2) break;
+    if (slow_in_a_row == opt.slow_steps) break;
   }
   return kept;
 }
