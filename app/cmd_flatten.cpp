@@ -19,6 +19,7 @@
 #include "core/disk_map.h"
 #include "core/error.h"
 #include "core/metrics.h"
+#include "core/run_beside.h"
 #include "core/region.h"
 #include "core/square_map.h"
 #include "core/sulcal_depth.h"
@@ -478,9 +479,18 @@ void run(const FlattenArgs& a) {
                                               : std::string("Try more passes (--passes 6) or a finer grid (--grid 1024); ")) +
                           "--keep-failed writes the map for inspection, marked as failed");
 
-  // Outputs: flat surface in mm (area = cortical area), uv in [0, 1]^2, FreeSurfer patch.
-  const double scale = write_flat_surfaces(a, surface, r, region.source, problem, correspondence);
-  if (!a.fs_patch.empty()) write_fs_patch(a.fs_patch, r, region.F, scale);
+  // Outputs: flat surface in mm (area = cortical area), uv in [0, 1]^2, FreeSurfer patch; the
+  // initial map's metrics (for --metrics) are measured meanwhile.
+  double scale = 0;
+  MapMetrics initial_metrics;
+  run_beside(
+      [&] {
+        scale = write_flat_surfaces(a, surface, r, region.source, problem, correspondence);
+        if (!a.fs_patch.empty()) write_fs_patch(a.fs_patch, r, region.F, scale);
+      },
+      [&] {
+        if (!a.metrics.empty()) initial_metrics = map_metrics(r.V, r.UV_initial, r.F, domain, a.k);
+      });
 
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const FlattenTimes times{seconds_map, clock.seconds("initial"), clock.seconds("stretch") + clock.seconds("flow"), seconds};
@@ -497,7 +507,7 @@ void run(const FlattenArgs& a) {
                  {"cell_pass", {{"element_cv_before", disk.cell_cv_before_pass}, {"kept", disk.cell_pass_kept}}},
                  {"elements", "the K x K cells of the square carried onto the disk by the concentric map (equal area)"}};
   if (!a.metrics.empty()) {
-    j["initial_metrics"] = metrics_json(map_metrics(r.V, r.UV_initial, r.F, domain, a.k));
+    j["initial_metrics"] = metrics_json(initial_metrics);
     write_json_file(a.metrics, j);
   }
   if (!a.png.empty()) write_map_png(a, mesh, r);

@@ -90,6 +90,7 @@ struct ConformalMapResult {
   MatrixXi inserted_parents;
   VectorXd inserted_weight;
   std::vector<int> boundary;  // boundary loop of F' (counter-clockwise on the rectangle)
+  MatrixXd boundary_uv;       // #boundary x 2: the rectangle points of the loop's vertices (arc length)
   VectorXi side_mask;       // #V': RectangleSide bits of boundary vertices, 0 elsewhere
   int num_input_vertices = 0;
   int corner_vertices_inserted = 0;  // vertices inserted on corners (corner splits)
@@ -109,6 +110,14 @@ struct ConformalMapResult {
 // solving more systems on the same mesh (the stretch-energy start) reuses its analysis.
 ConformalMapResult conformal_rectangle_map(const MatrixXd& V, const MatrixXi& F, const RectangleBoundaryMap& boundary,
                                            SpdSolver* solver = nullptr);
+
+// Its two steps, for a caller with work that needs the mesh but not the map (square_map builds the
+// stretch-energy system beside the solve). conformal_rectangle_mesh: the boundary's rectangle
+// points and the corner and ear splits; the result has everything but UV, weights, sliding and
+// cotangent_flips. conformal_rectangle_solve: the harmonic map of that mesh with its fallbacks;
+// it reads V, F, boundary, boundary_uv and side_mask and writes only the fields the first left out.
+ConformalMapResult conformal_rectangle_mesh(const MatrixXd& V, const MatrixXi& F, const RectangleBoundaryMap& boundary);
+void conformal_rectangle_solve(ConformalMapResult& R, const RectangleBoundaryMap& boundary, SpdSolver* solver = nullptr);
 
 // Harmonic map of a disk with a Dirichlet boundary: the vertices listed in `fixed` get the rows
 // of `fixed_uv` (#fixed x 2); every other vertex used by F is the weighted mean of its

@@ -6,10 +6,12 @@
 #include <cmath>
 #include <future>
 #include <limits>
+#include <memory>
 #include <sstream>
 
 #include "core/atlas_map.h"
 #include "core/error.h"
+#include "core/run_beside.h"
 #include "core/sparse_cholesky.h"
 #include "core/stretch_energy.h"
 
@@ -197,7 +199,15 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
     b.fallback = HarmonicWeights::ClampedCotangent;
   }
   report(progress, "initial", -1, "conformal map");
-  ConformalMapResult init = conformal_rectangle_map(V, F, b, &solver);
+  ConformalMapResult init = conformal_rectangle_mesh(V, F, b);
+  // The stretch-energy system needs the mesh, not the map: it is built beside the conformal solve.
+  const bool stretch_start = opt.stretch_start && !given_start;
+  std::unique_ptr<StretchEnergySystem> stretch_system;
+  run_beside([&] { conformal_rectangle_solve(init, b, &solver); },
+             [&] {
+               if (stretch_start)
+                 stretch_system = std::make_unique<StretchEnergySystem>(init.V, init.F, init.side_mask, opt.stretch.min_weight);
+             });
   R.surface_area = face_areas(init.V, init.F).sum();
   {
     std::ostringstream msg;
@@ -214,10 +224,10 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
     start = start_from_map(init, opt.start_uv, &R.start_repaired);
     init.UV = start;
     report(progress, "initial", -1, "given start: " + std::to_string(R.start_repaired) + " vertices re-placed to unfold it");
-  } else if (opt.stretch_start) {
+  } else if (stretch_start) {
     report(progress, "stretch", -1, "stretch-energy start");
     const VectorXd target = target_face_measure(init.V, init.F, fo.density, opt.width);
-    start = stretch_energy_map(init.V, init.F, target, init.UV, init.side_mask, opt.width, opt.stretch, &R.stretch, &solver);
+    start = stretch_energy_map(*stretch_system, target, init.UV, opt.width, opt.stretch, &R.stretch, &solver);
     std::ostringstream msg;
     msg << "stretch-energy start: " << R.stretch.iterations << " iterations, mean |ln stretch| per face "
         << R.stretch.initial_log_stretch << " -> " << R.stretch.final_log_stretch;

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/authalic_flow.h"
+#include "core/run_beside.h"
 #include "core/sparse_cholesky.h"
 
 namespace authalic {
@@ -37,8 +38,8 @@ namespace {
 // c: the edge (i, j) opposite c, a diagonal +w and an off-diagonal −w per end that is an unknown;
 // a held neighbour goes to B), so an iteration only refills the values.
 struct InteriorSystem {
-  const MatrixXi& F;
-  const std::vector<int>& idx;  // vertex -> unknown, -1 for held or unused vertices
+  MatrixXi F;
+  std::vector<int> idx;  // vertex -> unknown, -1 for held or unused vertices
   SparseMatrix L, B;
   std::vector<int> l_slot, b_slot;
 
@@ -58,8 +59,8 @@ struct InteriorSystem {
       }
   }
 
-  InteriorSystem(const MatrixXi& faces, const std::vector<int>& unknown, int m, Eigen::Index nv)
-      : F(faces), idx(unknown), L(m, m), B(m, nv) {
+  InteriorSystem(const MatrixXi& faces, std::vector<int> unknown, int m, Eigen::Index nv)
+      : F(faces), idx(std::move(unknown)), L(m, m), B(m, nv) {
     std::vector<Eigen::Triplet<double>> t, tb;
     t.reserve(static_cast<std::size_t>(12 * F.rows()));
     for_each_contribution([&](Eigen::Index, int, int r, int col, bool to_boundary, bool) {
@@ -95,25 +96,67 @@ struct InteriorSystem {
 
 }  // namespace
 
-MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd& face_target, const MatrixXd& UV0,
-                            const VectorXi& side_mask, double width, const StretchEnergyOptions& opt,
-                            StretchEnergyReport* report, SpdSolver* reuse) {
-  const Eigen::Index nv = V.rows(), nf = F.rows();
-  const MatrixXd W = surface_cot_weights(V, F, opt.min_weight);
-  // Unknowns: the vertices used by F that are not on the boundary (side_mask 0).
+struct StretchEnergySystem::Parts {
+  MatrixXd W;            // #F x 3 clamped cotangent weights of the surface
+  VectorXi side_mask;    // #V
+  VectorXi on_boundary;  // #V: 1 for the held (slid) boundary vertices
+  int unknowns = 0;
+  InteriorSystem sys;
+};
+
+namespace {
+
+// Unknowns: the vertices used by F that are not on the boundary (side_mask 0).
+std::vector<int> interior_unknowns(const MatrixXi& F, const VectorXi& side_mask, Eigen::Index nv, VectorXi* on_boundary,
+                                   int* count) {
   std::vector<char> used(static_cast<std::size_t>(nv), 0);
-  for (Eigen::Index f = 0; f < nf; ++f)
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int c = 0; c < 3; ++c) used[F(f, c)] = 1;
   std::vector<int> idx(static_cast<std::size_t>(nv), -1);
-  VectorXi on_boundary = VectorXi::Zero(nv);
+  *on_boundary = VectorXi::Zero(nv);
   int m = 0;
   for (Eigen::Index v = 0; v < nv; ++v) {
     if (!used[v]) continue;
     if (side_mask.size() && side_mask[v])
-      on_boundary[v] = 1;
+      (*on_boundary)[v] = 1;
     else
       idx[v] = m++;
   }
+  *count = m;
+  return idx;
+}
+
+}  // namespace
+
+StretchEnergySystem::StretchEnergySystem(const MatrixXd& V, const MatrixXi& F, const VectorXi& side_mask, double min_weight) {
+  VectorXi on_boundary;
+  int m = 0;
+  std::vector<int> idx = interior_unknowns(F, side_mask, V.rows(), &on_boundary, &m);
+  parts_.reset(new Parts{surface_cot_weights(V, F, min_weight), side_mask, std::move(on_boundary), m,
+                         InteriorSystem(F, std::move(idx), m, V.rows())});
+}
+StretchEnergySystem::~StretchEnergySystem() = default;
+StretchEnergySystem::StretchEnergySystem(StretchEnergySystem&&) noexcept = default;
+StretchEnergySystem& StretchEnergySystem::operator=(StretchEnergySystem&&) noexcept = default;
+
+MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd& face_target, const MatrixXd& UV0,
+                            const VectorXi& side_mask, double width, const StretchEnergyOptions& opt,
+                            StretchEnergyReport* report, SpdSolver* reuse) {
+  StretchEnergySystem system(V, F, side_mask, opt.min_weight);
+  return stretch_energy_map(system, face_target, UV0, width, opt, report, reuse);
+}
+
+MatrixXd stretch_energy_map(StretchEnergySystem& system, const VectorXd& face_target, const MatrixXd& UV0, double width,
+                            const StretchEnergyOptions& opt, StretchEnergyReport* report, SpdSolver* reuse) {
+  StretchEnergySystem::Parts& parts = system.parts();
+  InteriorSystem& sys = parts.sys;
+  const MatrixXi& F = sys.F;
+  const MatrixXd& W = parts.W;
+  const VectorXi& side_mask = parts.side_mask;
+  const VectorXi& on_boundary = parts.on_boundary;
+  const std::vector<int>& idx = sys.idx;
+  const int m = parts.unknowns;
+  const Eigen::Index nv = static_cast<Eigen::Index>(idx.size()), nf = F.rows();
 
   MatrixXd UV = UV0.leftCols(2);
   VectorXd area = signed_face_areas_2d(UV, F);
@@ -121,7 +164,6 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
   const double st = face_target.sum();
   double err = mean_log_stretch(area, face_target);
   if (report) report->initial_log_stretch = report->final_log_stretch = err;
-  InteriorSystem sys(F, idx, m, nv);
   SparseMatrix& L = sys.L;
   SparseMatrix& B = sys.B;
   VectorXd scale = VectorXd::Ones(nf);  // w_k / w_0 = Π σ_j per face
@@ -134,18 +176,33 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
     for (Eigen::Index f = 0; f < nf; ++f)
       trial[f] = scale[f] * std::pow(std::max(1e-300, (area[f] / sa) / (face_target[f] / st)), opt.exponent);
     sys.refill(W, trial);
-    // The first step factorises; on large meshes later ones solve by CG preconditioned with the
-    // last factorisation (the weights change by the faces' stretch, near 1 after the first step),
-    // cutting the residual of the current map by opt.inexact_tolerance: a fixed-point iteration
-    // needs no exact solves (B3, 149k unknowns: 9, 13 and 4 CG steps of 0.025 s instead of 0.5 s
-    // refactorisations; final per-face error 0.0084 and element CV 0.00027, as with exact steps).
-    // The preconditioner drifts as the weights accumulate: after a solve that needed more than
-    // opt.inexact_refactor_after steps the next step factorises again. A step that folds or does
-    // not lower the error is redone exactly (Floater's guarantee holds for the exact solve)
-    // before the boundary move is halved.
+    // The first step factorises; on the largest meshes later ones solve by CG preconditioned with
+    // the last factorisation (the weights change by the faces' stretch, near 1 after the first
+    // step), cutting the residual of the current map by opt.inexact_tolerance: a fixed-point
+    // iteration needs no exact solves. The preconditioner drifts as the weights accumulate: after
+    // a solve that needed more than opt.inexact_refactor_after steps the next step factorises
+    // again. A step that folds or does not lower the error is redone exactly (Floater's guarantee
+    // holds for the exact solve) before the boundary move is halved.
     bool exact = k == 0 || opt.inexact_tolerance <= 0 || m <= opt.inexact_min_unknowns || refactor_next;
-    if (exact && !solver.refactor(L)) break;
     refactor_next = false;
+    // Boundary: slid along its sides by one Moser pass of the current map (Neumann velocity, so
+    // corners stay), and only as far as the interior re-solve stays an embedding (halving). The
+    // slide needs the map, not the new weights: it runs beside the factorisation.
+    MatrixXd slid = UV;
+    auto slide_boundary = [&] {
+      if (!opt.moser_boundary) return;
+      GridFlowOptions slide;
+      slide.resolution = opt.boundary_grid;
+      slide.smoothing_cells = 1.0;
+      slide.rk4_steps = 20;
+      slid = moser_grid_pass(face_target, UV, F, side_mask, width, slide, 1.0, on_boundary);
+    };
+    bool factorised = true;
+    if (exact)
+      run_beside([&] { factorised = solver.refactor(L); }, slide_boundary);
+    else
+      slide_boundary();
+    if (!factorised) break;
     bool failed = false;
     auto factorise_now = [&] {
       exact = true;
@@ -166,16 +223,6 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
       return solver.solve(rhs);
     };
 
-    // Boundary: slid along its sides by one Moser pass of the current map (Neumann velocity, so
-    // corners stay), and only as far as the interior re-solve stays an embedding (halving).
-    MatrixXd slid = UV;
-    if (opt.moser_boundary) {
-      GridFlowOptions slide;
-      slide.resolution = opt.boundary_grid;
-      slide.smoothing_cells = 1.0;
-      slide.rk4_steps = 20;
-      slid = moser_grid_pass(face_target, UV, F, side_mask, width, slide, 1.0, on_boundary);
-    }
     bool accepted = false;
     double e = err;
     MatrixXd next;
