@@ -415,6 +415,7 @@ MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const Matri
     out(v, 0) = x;
     out(v, 1) = y;
   };
+#pragma omp parallel for schedule(static)
   for (Eigen::Index v = 0; v < nv; ++v) place(v);
   VectorXd a;
   halve_steps_until_unfolded(
@@ -593,6 +594,7 @@ VectorXd single_precision_area_floor(const MatrixXd& UV, const MatrixXi& F) {
     return static_cast<double>(std::nextafter(f, std::numeric_limits<float>::infinity()) - f);
   };
   VectorXd floor(F.rows());
+#pragma omp parallel for schedule(static)
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     double bound = 0;  // ½ Σ (|Δy| u(x)/2 + |Δx| u(y)/2)
     for (int c = 0; c < 3; ++c) {

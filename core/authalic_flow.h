@@ -198,7 +198,8 @@ MatrixXd face_area_newton_displacement(const MatrixXd& UV, const MatrixXi& F, co
 // critical-step limit, only the end state is checked (for the grid pass, whose vertices travel on
 // curved paths, so the straight-path critical steps do not apply). constrain(v, x, y), if given,
 // brings vertex v's new position onto its domain (a rectangle's side; the disk's polish holds its
-// circle, so it passes none). Returns UV + λ_v D_v per vertex.
+// circle, so it passes none); it is called from several threads at once, so it must only read
+// shared state. Returns UV + λ_v D_v per vertex.
 MatrixXd local_step_positions(const MatrixXd& UV, const MatrixXi& F, const MatrixXd& D, double theta,
                               const VectorXd& face_limit,
                               const std::function<void(Eigen::Index, double&, double&)>& constrain = {});
