@@ -18,9 +18,9 @@
 // the polish: sliding them opened chords of 0.37 rad on fs741 (the circle's segment under a chord
 // is lost to the cells along it). Long chords are split first. Cell-scale area, which the elements see, is kept by the carry up to the mesh's
 // interpolation; the disk's elements are the square's cells carried the same way (core/domain.h).
-// Measured (flatten --domain disk, bench/bench_disk.sh): B1 element CV 0.0039, per-face mean
-// 0.0079; fs741 lh white CV 0.0035, per-face 0.0088 (the square maps: 0.0023 / 0.018 and 0.0003
-// / 0.0094).
+// Measured (flatten --domain disk, bench/bench_disk.sh): B1 element CV 0.0040, per-face mean
+// 0.0079; fs741 lh white CV 0.0037, per-face 0.0083 (the square maps: 0.0024 / 0.018 and 0.0003
+// / 0.0093).
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "core/square_map.h"
