@@ -89,3 +89,23 @@ TEST(DiskCli, NativeResolutionWhiteSurfaceMapsOntoTheDisk) {
   // fs741's cortex boundary has chords too long for the circle: split, and said so.
   EXPECT_GT(j.at("disk").at("inserted_vertices").get<int>(), 0);
 }
+
+TEST(DiskCli, NativeResolutionPialSurfaceMapsOntoTheDisk) {
+  // The pial's thin triangles fold in the concentric carry next to the circle (302); untangling
+  // them took more rounds than the white's (the map failed with 83 flips before).
+  AUTHALIC_REQUIRE_SHARED(pial, "fs741/lh.pial.surf.gii");
+  AUTHALIC_REQUIRE_SHARED(label, "fs741/lh.cortex.label");
+  const std::string dir = authalic::test::temp_dir("disk_fs741_pial");
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " flatten " + pial + " " + dir + "/lh.disk.surf.gii --label " + label +
+                            " --domain disk --metrics " + dir + "/m.json -q",
+                        &output),
+            0)
+      << output;
+  const auto j = read_json(dir + "/m.json");
+  const auto& mm = j.at("metrics");
+  EXPECT_EQ(mm.at("flips"), 0);
+  EXPECT_GT(j.at("disk").at("carried_flips").get<int>(), 100);
+  EXPECT_LE(mm.at("element_cv").get<double>(), 0.01);
+  EXPECT_LE(mm.at("face_ln_area_abs").at("mean").get<double>(), 0.04);
+}
