@@ -30,15 +30,25 @@ cmake --build "$B" -j"$JOBS" --target authalic_core
 CHOLMOD=$(grep -E '^CHOLMOD_LIBRARY:' "$B/CMakeCache.txt" | cut -d= -f2)
 CHOLMOD_INC=$(grep -E '^CHOLMOD_INCLUDE_DIR:' "$B/CMakeCache.txt" | cut -d= -f2)
 mkdir -p "$B/tsan-tests"
+# An object is rebuilt when its source or any header it included (its -MMD dependency file) is
+# newer: a header that changed a struct's layout under an old object gave garbage fields.
+stale() {  # OBJ DEPFILE
+  [ -f "$1" ] && [ -f "$2" ] || return 0
+  local dep
+  for dep in $(sed -e 's/^[^:]*://' -e 's/\\$//' "$2"); do
+    [ "$dep" -nt "$1" ] && return 0
+  done
+  return 1
+}
 objs=()
 for src in tests/core/*.cpp tests/common/test_data.cpp; do
   obj="$B/tsan-tests/$(basename "$src" .cpp).o"
-  if [ ! -f "$obj" ] || [ "$src" -nt "$obj" ]; then
+  if stale "$obj" "${obj%.o}.d"; then
     echo "tsan.sh: compiling $src" >&2
     clang++ -std=c++17 -O1 -g -fsanitize=thread -fno-omit-frame-pointer -fopenmp=libomp \
       -I. -I"$B/generated" -Itests -isystem /usr/include/eigen3 -isystem "$CHOLMOD_INC" \
       -DAUTHALIC_SHARED_DATA="\"$PWD/../shared/data\"" -DAUTHALIC_SOURCE_DIR="\"$PWD\"" \
-      -DAUTHALIC_BINARY="\"$PWD/$B/authalic\"" -c "$src" -o "$obj"
+      -DAUTHALIC_BINARY="\"$PWD/$B/authalic\"" -MMD -MF "${obj%.o}.d" -c "$src" -o "$obj"
   fi
   objs+=("$obj")
 done
