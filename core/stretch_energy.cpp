@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "core/authalic_flow.h"
 #include "core/run_beside.h"
@@ -157,6 +159,10 @@ MatrixXd stretch_energy_map(StretchEnergySystem& system, const VectorXd& face_ta
   const std::vector<int>& idx = sys.idx;
   const int m = parts.unknowns;
   const Eigen::Index nv = static_cast<Eigen::Index>(idx.size()), nf = F.rows();
+  if (face_target.size() != nf || UV0.rows() != nv || UV0.cols() < 2)
+    throw std::invalid_argument("stretch_energy_map: " + std::to_string(face_target.size()) + " face targets and " +
+                                std::to_string(UV0.rows()) + " map rows for a system of " + std::to_string(nf) +
+                                " faces and " + std::to_string(nv) + " vertices");
 
   MatrixXd UV = UV0.leftCols(2);
   VectorXd area = signed_face_areas_2d(UV, F);

@@ -37,7 +37,7 @@ struct StretchEnergyOptions {
   // more than inexact_refactor_after; tolerance 0: every step exact.
   // Only systems of more than inexact_min_unknowns (SpdSolver's METIS range): below, an AMD-ordered
   // factorisation costs 8-10 solves and a CG step 1.6, and the steps take 5-14 CG steps, so an
-  // exact step costs as much (fs741 lh.white: 1.00x the CPU time; B3 1.05x) and its
+  // exact step costs as much (fs741 lh.white: 1.00x the CPU time; B3 1.05-1.10x) and its
   // factorisation runs beside the boundary slide (2 threads: 0.91x the wall time on both). At
   // 600k vertices (METIS) exact steps cost 1.14x the CPU time.
   double inexact_tolerance = 1e-3;
@@ -66,8 +66,8 @@ MatrixXd stretch_energy_map(const MatrixXd& V, const MatrixXi& F, const VectorXd
                             const VectorXi& side_mask, double width, const StretchEnergyOptions& options = {},
                             StretchEnergyReport* report = nullptr, SpdSolver* solver = nullptr);
 
-// What the iterations need that does not depend on a map: the surface's clamped cotangent weights
-// (options.min_weight), the unknowns (vertices used by F off the boundary) and the Laplacian's
+// What the iterations need that does not depend on a map: the surface's cotangent weights clamped
+// to min_weight of their mean, the unknowns (vertices used by F off the boundary) and the Laplacian's
 // pattern with the slot of every contribution, which each iteration refills. Building it costs
 // about one factorisation (fs741 lh.white: 0.28 s), so a caller can build it beside other work on
 // the same mesh (square_map: beside the conformal solve; core/run_beside.h).
@@ -85,7 +85,8 @@ class StretchEnergySystem {
 };
 
 // The same iterations on a prepared system (its F, side_mask and weights; options.min_weight is
-// not read again). The system's values are overwritten; its pattern is kept.
+// not read again). The system's values are overwritten; its pattern is kept. face_target has one
+// entry per face of the system, UV0 one row per vertex (std::invalid_argument otherwise).
 MatrixXd stretch_energy_map(StretchEnergySystem& system, const VectorXd& face_target, const MatrixXd& UV0, double width,
                             const StretchEnergyOptions& options = {}, StretchEnergyReport* report = nullptr,
                             SpdSolver* solver = nullptr);

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include "common/hard_meshes.h"
@@ -329,4 +330,21 @@ TEST(SphereFromSquare, AutoRouteFallsBackToTheFlowAndSaysWhy) {
   EXPECT_TRUE(sphere_covers_once(r.sphere, m.F));
   o.route = SphereRoute::Square;
   EXPECT_THROW(authalic_sphere_map(m, o), ProcessingError);
+}
+
+TEST(StretchEnergy, APreparedSystemGivesTheBitsOfTheOneCallMapAndChecksItsInputs) {
+  const TriMesh m = long_rectangle(8);
+  const ConformalMapResult c = conformal_rectangle_map(m.V, m.F, RectangleBoundaryMap{});
+  const VectorXd target = face_areas(c.V, c.F);
+  StretchEnergyOptions o;
+  StretchEnergyReport one, prepared;
+  const MatrixXd a = stretch_energy_map(c.V, c.F, target, c.UV, c.side_mask, 1.0, o, &one);
+  StretchEnergySystem system(c.V, c.F, c.side_mask, o.min_weight);
+  const MatrixXd b = stretch_energy_map(system, target, c.UV, 1.0, o, &prepared);
+  EXPECT_GT(one.iterations, 1);
+  EXPECT_EQ(one.iterations, prepared.iterations);
+  EXPECT_EQ((a - b).cwiseAbs().maxCoeff(), 0.0);
+  // A target or map of another mesh is refused, not read out of bounds.
+  EXPECT_THROW(stretch_energy_map(system, VectorXd(target.head(target.size() - 1)), c.UV, 1.0, o), std::invalid_argument);
+  EXPECT_THROW(stretch_energy_map(system, target, MatrixXd(c.UV.topRows(c.UV.rows() - 1)), 1.0, o), std::invalid_argument);
 }
