@@ -6,7 +6,7 @@
 #include <cmath>
 #include <future>
 #include <limits>
-#include <memory>
+#include <optional>
 #include <sstream>
 
 #include "core/atlas_map.h"
@@ -202,11 +202,10 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   ConformalMapResult init = conformal_rectangle_mesh(V, F, b);
   // The stretch-energy system needs the mesh, not the map: it is built beside the conformal solve.
   const bool stretch_start = opt.stretch_start && !given_start;
-  std::unique_ptr<StretchEnergySystem> stretch_system;
+  std::optional<StretchEnergySystem> stretch_system;
   run_beside([&] { conformal_rectangle_solve(init, b, &solver); },
              [&] {
-               if (stretch_start)
-                 stretch_system = std::make_unique<StretchEnergySystem>(init.V, init.F, init.side_mask, opt.stretch.min_weight);
+               if (stretch_start) stretch_system.emplace(init.V, init.F, init.side_mask, opt.stretch.min_weight);
              });
   R.surface_area = face_areas(init.V, init.F).sum();
   {

@@ -102,8 +102,7 @@ struct StretchEnergySystem::Parts {
   MatrixXd W;            // #F x 3 clamped cotangent weights of the surface
   VectorXi side_mask;    // #V
   VectorXi on_boundary;  // #V: 1 for the held (slid) boundary vertices
-  int unknowns = 0;
-  InteriorSystem sys;
+  InteriorSystem sys;    // its L has one row per unknown
 };
 
 namespace {
@@ -134,7 +133,7 @@ StretchEnergySystem::StretchEnergySystem(const MatrixXd& V, const MatrixXi& F, c
   VectorXi on_boundary;
   int m = 0;
   std::vector<int> idx = interior_unknowns(F, side_mask, V.rows(), &on_boundary, &m);
-  parts_.reset(new Parts{surface_cot_weights(V, F, min_weight), side_mask, std::move(on_boundary), m,
+  parts_.reset(new Parts{surface_cot_weights(V, F, min_weight), side_mask, std::move(on_boundary),
                          InteriorSystem(F, std::move(idx), m, V.rows())});
 }
 StretchEnergySystem::~StretchEnergySystem() = default;
@@ -157,7 +156,7 @@ MatrixXd stretch_energy_map(StretchEnergySystem& system, const VectorXd& face_ta
   const VectorXi& side_mask = parts.side_mask;
   const VectorXi& on_boundary = parts.on_boundary;
   const std::vector<int>& idx = sys.idx;
-  const int m = parts.unknowns;
+  const int m = static_cast<int>(sys.L.rows());
   const Eigen::Index nv = static_cast<Eigen::Index>(idx.size()), nf = F.rows();
   if (face_target.size() != nf || UV0.rows() != nv || UV0.cols() < 2)
     throw std::invalid_argument("stretch_energy_map: " + std::to_string(face_target.size()) + " face targets and " +
