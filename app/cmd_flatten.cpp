@@ -535,7 +535,7 @@ void setup(CLI::App& parent) {
       "Area-preserving (authalic) map of a cortical region onto the unit square: arc-length boundary with the frontal "
       "pole at the top middle, conformal interior, then Moser/Lie area-restoring flow. Lateral surface faces the viewer; "
       "right hemispheres are mirror images of left ones.");
-  sub->add_option("SURFACE", a->surface, "Cortical surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, STL), mm, RAS")->required();
+  sub->add_option("SURFACE", a->surface, "Cortical surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, MNI .obj, STL), mm, RAS")->required();
   sub->add_option("OUT", a->out,
                   "Output flat surface (GIFTI .surf.gii): x,y in mm, scaled so its area equals the cortical area (mm^2); "
                   "the input's vertices first, vertices inserted by corner/ear splits appended")

@@ -243,7 +243,7 @@ void setup(CLI::App& parent) {
       "+y anterior, +z superior. "
       "A map that fails its acceptance (0 flipped faces, element CV <= 0.01 at 64x32, per-vertex mean |ln area ratio| "
       "<= 0.01) is an error: exit code 3, nothing written.");
-  sub->add_option("SURFACE", a->surface, "Closed genus-0 surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, STL), mm")->required();
+  sub->add_option("SURFACE", a->surface, "Closed genus-0 surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, MNI .obj, STL), mm")->required();
   sub->add_option("OUT", a->out, "Output sphere surface (GIFTI .surf.gii), same vertices and triangles as SURFACE")->required();
   sub->add_option("--metrics", a->metrics, "Write distortion metrics (JSON; areas in mm^2, element grid 64 x 32)");
   sub->add_option("--png", a->png, "Write a PNG of the sphere seen from lateral and medial, shaded by sulcal depth");

@@ -23,7 +23,7 @@ void setup(CLI::App& parent) {
       "subdivide",
       "Midpoint (1-to-4) subdivision of a surface, N times (vertices x ~4^N). The input's vertices come first, in "
       "their order; new vertices are edge midpoints (mm, same space as the input).");
-  sub->add_option("IN", a->in, "Input surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, STL)")->required();
+  sub->add_option("IN", a->in, "Input surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, MNI .obj, STL)")->required();
   sub->add_option("OUT", a->out, "Output surface (format by extension)")->required();
   sub->add_option("--times", a->times, "Number of subdivisions")->check(in_range(1, 6))->capture_default_str();
   sub->add_option("--faces-from", a->faces_from,

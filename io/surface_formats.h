@@ -54,6 +54,15 @@ void write_gifti_surface(const std::string& path, const TriMesh& mesh, const Sur
 void write_gifti_columns(const std::string& path, const MatrixXd& values, const FuncWriteOptions& options, int intent,
                          const std::map<int, std::string>* label_table);
 
+// ---- MNI .obj (io/mni_obj_io.cpp): CIVET's and the MNI tools' polygon objects --------------
+// ASCII objects start with 'P' and whitespace (Wavefront keywords are lower case); binary ones
+// with 'p' and counts that describe exactly the file's size (either byte order).
+bool looks_like_mni_obj(const std::string& bytes);
+// Polygons are fan-triangulated; normals and colours are read past. Refuses line objects, counts
+// beyond g_max_vtk_vertices / g_max_vtk_faces, polygons of fewer than 3 corners, corners outside
+// the points and data after the object, each with an InputError naming `path`.
+TriMesh parse_mni_obj(const std::string& bytes, const std::string& path);
+
 // ---- VTK (io/vtk_io.cpp): .vtk, .vtp, .ply, .obj, .stl ------------------------------------
 TriMesh read_vtk_family(const std::string& path, const std::string& format);
 void write_vtk_family(const std::string& path, const TriMesh& mesh, const std::string& format);

@@ -46,7 +46,9 @@ void validate_mesh(const TriMesh& mesh, const std::string& path, const std::stri
 
 namespace {
 
-enum class SurfaceFormat { kFreeSurfer, kPatch, kCurv, kGifti, kVtk, kVtp, kPly, kObj, kStl, kUnknown };
+enum class SurfaceFormat { kFreeSurfer, kPatch, kCurv, kGifti, kVtk, kVtp, kPly, kObj, kMniObj, kStl, kUnknown };
+
+bool is_text(const std::string& bytes);
 
 // Magic first: a GIFTI named lh.white or a FreeSurfer surface named x.gii is still read correctly.
 SurfaceFormat sniff_surface(const std::string& bytes, const std::string& path) {
@@ -68,8 +70,11 @@ SurfaceFormat sniff_surface(const std::string& bytes, const std::string& path) {
     std::memcpy(&n, bytes.data() + 80, 4);  // little-endian in the file; x86 hosts read it directly
     if (84 + 50ull * n == bytes.size()) return SurfaceFormat::kStl;
   }
+  if (detail::looks_like_mni_obj(bytes)) return SurfaceFormat::kMniObj;
   if (head.rfind("solid", 0) == 0) return SurfaceFormat::kStl;
   const std::string name = detail::lower_filename(path);
+  // A binary MNI object whose counts do not fit: its parser says what is wrong, not VTK's OBJ reader.
+  if (ends_with(name, ".obj") && head.rfind('p', 0) == 0 && !is_text(head.substr(0, 64))) return SurfaceFormat::kMniObj;
   if (ends_with(name, ".gii")) return SurfaceFormat::kGifti;
   if (ends_with(name, ".vtk")) return SurfaceFormat::kVtk;
   if (ends_with(name, ".vtp")) return SurfaceFormat::kVtp;
@@ -175,6 +180,7 @@ Surface read_surface(const std::string& path) {
     case SurfaceFormat::kVtp: s.mesh = detail::read_vtk_family(path, "vtp"); s.format = "vtp"; break;
     case SurfaceFormat::kPly: s.mesh = detail::read_vtk_family(path, "ply"); s.format = "ply"; break;
     case SurfaceFormat::kObj: s.mesh = detail::read_vtk_family(path, "obj"); s.format = "obj"; break;
+    case SurfaceFormat::kMniObj: s.mesh = detail::parse_mni_obj(bytes, path); s.format = "mni_obj"; break;
     case SurfaceFormat::kStl:
       s.mesh = detail::read_vtk_family(path, "stl");
       detail::merge_coincident_vertices(s.mesh);
@@ -440,6 +446,7 @@ RegionFile read_region_file_checked(const std::string& path, int expected_vertic
     case SurfaceFormat::kVtp:
     case SurfaceFormat::kPly:
     case SurfaceFormat::kObj:
+    case SurfaceFormat::kMniObj:
     case SurfaceFormat::kStl: {
       const Surface s = read_surface(path);
       r.is_face_set = true;

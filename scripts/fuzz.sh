@@ -14,7 +14,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_PER_TARGET="${1:-60}"
 BUILD="${FUZZ_BUILD_DIR:-build-fuzz}"
-TARGETS=(${FUZZ_TARGETS:-freesurfer_surface freesurfer_curv freesurfer_label freesurfer_patch gifti nifti mgh ply obj stl vtk})
+TARGETS=(${FUZZ_TARGETS:-freesurfer_surface freesurfer_curv freesurfer_label freesurfer_patch gifti nifti mgh ply obj mni_obj stl vtk})
 JOBS="${FUZZ_BUILD_JOBS:-2}"
 SEED="${FUZZ_SEED:-1}"
 

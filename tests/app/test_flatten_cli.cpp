@@ -196,6 +196,49 @@ TEST(FlattenCli, SameBytesForOneAndTwoThreads) {
   EXPECT_EQ(a, b);
 }
 
+// CIVET's layout: a hemisphere as a binary MNI .obj (float32, as CIVET's tools write it) and the
+// cortex as a text mask (1 = cortex, one line per vertex). The same surface in GIFTI, with the
+// same mask, must give the same map: the reader changes nothing.
+TEST(FlattenCli, CivetStyleMniObjWithATextMaskGivesTheMapOfTheSameSurfaceInGifti) {
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(flat, "fsaverage5/flat_left.gii.gz");
+  if (run_command("/usr/bin/python3 -c 'import nibabel, numpy, vtk'") != 0) {
+    if (authalic::test::running_in_ci()) FAIL() << "python3-nibabel or python3-vtk9 missing under CI=true";
+    GTEST_SKIP() << "python3-nibabel or python3-vtk9 not available";
+  }
+  const std::string dir = authalic::test::temp_dir("flatten_civet");
+  const std::string script = dir + "/civet.py";
+  std::ofstream(script) << "import nibabel as nib, numpy as np, vtk\n"
+                           "g = nib.load('" << white << "'); V = g.darrays[0].data; F = g.darrays[1].data\n"
+                           "pts = vtk.vtkPoints(); pts.SetDataTypeToFloat()\n"
+                           "for p in V: pts.InsertNextPoint(*p)\n"
+                           "polys = vtk.vtkCellArray()\n"
+                           "for t in F: polys.InsertNextCell(3, [int(i) for i in t])\n"
+                           "pd = vtk.vtkPolyData(); pd.SetPoints(pts); pd.SetPolys(polys)\n"
+                           "w = vtk.vtkMNIObjectWriter(); w.SetInputData(pd); w.SetFileTypeToBinary()\n"
+                           "w.SetFileName('" << dir << "/lh_white_surface_81920.obj'); assert w.Write() == 1\n"
+                           "used = np.zeros(len(V)); used[np.unique(nib.load('" << flat << "').darrays[1].data)] = 1\n"
+                           "np.savetxt('" << dir << "/lh_cortex_mask.txt', used, fmt='%d')\n";
+  std::string output;
+  ASSERT_EQ(run_command("/usr/bin/python3 " + script, &output), 0) << output;
+  const std::string mask = " --label " + dir + "/lh_cortex_mask.txt -q --metrics ";
+  ASSERT_EQ(run_command(authalic_binary() + " flatten " + dir + "/lh_white_surface_81920.obj " + dir + "/civet.surf.gii" + mask +
+                            dir + "/civet.json",
+                        &output),
+            0)
+      << output;
+  ASSERT_EQ(run_command(authalic_binary() + " flatten " + white + " " + dir + "/gifti.surf.gii" + mask + dir + "/gifti.json", &output), 0)
+      << output;
+  const auto c = read_json(dir + "/civet.json").at("metrics"), g = read_json(dir + "/gifti.json").at("metrics");
+  EXPECT_EQ(c.at("flips"), 0);
+  EXPECT_LE(c.at("element_cv").get<double>(), 0.01);
+  EXPECT_EQ(c.at("element_cv").get<double>(), g.at("element_cv").get<double>());
+  EXPECT_EQ(c.at("face_ln_area_abs").at("mean").get<double>(), g.at("face_ln_area_abs").at("mean").get<double>());
+  const authalic::io::Surface a = authalic::io::read_surface(dir + "/civet.surf.gii"), b = authalic::io::read_surface(dir + "/gifti.surf.gii");
+  EXPECT_EQ(a.mesh.F, b.mesh.F);
+  EXPECT_EQ(a.mesh.V, b.mesh.V);
+}
+
 TEST(FlattenCli, RefusesAClosedSurfaceWithoutARegionAndWritesNothing) {
   const std::string src = AUTHALIC_SOURCE_DIR;
   const std::string dir = authalic::test::temp_dir("flatten_closed");

@@ -1,5 +1,6 @@
 // Writes the seed corpus for the fuzz targets: small valid files from the project's own writers,
 // one folder per target (scripts/fuzz.sh calls it before fuzzing).
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -17,7 +18,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::filesystem::path root(argv[1]);
-  for (const char* t : {"freesurfer_surface", "freesurfer_curv", "freesurfer_label", "freesurfer_patch", "gifti", "nifti", "mgh", "ply", "obj", "stl", "vtk"})
+  for (const char* t : {"freesurfer_surface", "freesurfer_curv", "freesurfer_label", "freesurfer_patch", "gifti", "nifti", "mgh", "ply", "obj", "mni_obj", "stl", "vtk"})
     std::filesystem::create_directories(root / t);
   auto at = [&](const char* target, const char* name) { return (root / target / name).string(); };
 
@@ -80,6 +81,25 @@ int main(int argc, char** argv) {
   text(at("ply", "a.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
                            "element face 1\nproperty list uchar int vertex_indices\nend_header\n" + tri + "3 0 1 2\n");
   text(at("obj", "a.obj"), "# c\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1\nf -3 -2 -1\n");
+  // MNI .obj: ASCII with a quad (colour per item), and binary (little-endian) of the tetrahedron.
+  text(at("mni_obj", "a.obj"), "P 0.3 0.3 0.4 10 1 4\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n\n0 0 1\n0 0 1\n0 0 1\n0 0 1\n\n"
+                               "2\n1\n1 1 1 1\n0 0 1 1\n\n3 7\n\n0 1 2 0 2 3 1\n");
+  {
+    std::string b = "p";
+    auto put = [&](auto v) { b.append(reinterpret_cast<const char*>(&v), sizeof v); };  // x86: little-endian
+    for (int k = 0; k < 5; ++k) put(0.5f);
+    put(std::int32_t{4});
+    for (int i = 0; i < 4; ++i)
+      for (int c = 0; c < 3; ++c) put(static_cast<float>(m.V(i, c)));
+    for (int k = 0; k < 12; ++k) put(0.0f);
+    put(std::int32_t{4});
+    put(std::int32_t{0});
+    put(std::uint32_t{0xFFFFFFFFu});
+    for (const std::int32_t end : {3, 6, 9, 12}) put(end);
+    for (int f = 0; f < 4; ++f)
+      for (int c = 0; c < 3; ++c) put(static_cast<std::int32_t>(m.F(f, c)));
+    text(at("mni_obj", "b.obj"), b);
+  }
   text(at("stl", "a.stl"), "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid x\n");
   text(at("vtk", "a3_vtk"), "v# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 1 1 0\n"
                             "POLYGONS 1 5\n4 0 1 3 2\nTRIANGLE_STRIPS 1 4\n3 0 1 2\nPOINT_DATA 4\nSCALARS s float 1\nLOOKUP_TABLE default\n1 2 3 4\n");
