@@ -2,7 +2,8 @@
 # Maps of mesh families FreeSurfer does not write, made from the real data (scripts/mesh_families.py):
 # the native white surface with coordinate noise, decimated by VTK's quadric decimation, voxelised
 # and remeshed by marching cubes (as surfaces from a segmentation are), MNI152's whole-brain
-# surface, and a synthetic bulb on a narrow neck. For each: `flatten` of its cortex (the label
+# surface, and a synthetic bulb on a narrow neck; and the native white and pial surfaces with other
+# cortex labels (grown, shrunk, ragged, a ball cut out), as other subjects' labels differ. For each: `flatten` of its cortex (the label
 # carried over by nearest vertex) and `sphere` of the closed surface, with exit code, flips,
 # element CV (32x32 square, 64x32 sphere), per-face mean |ln area ratio|, CPU seconds and peak
 # memory. A refusal (exit 2: not a closed genus-0 manifold) or a failed acceptance (exit 3) is a row
@@ -33,6 +34,7 @@ $GEN voxelise "$WHITE" "$LABEL" "$WORK/voxel05.surf.gii" --voxel 0.5
 $GEN voxelise "$WHITE" "$LABEL" "$WORK/voxel10.surf.gii" --voxel 1.0
 $GEN hull "${MNI}_gm_tal_nlin_sym_09a_converted.nii.gz" "${MNI}_wm_tal_nlin_sym_09a_converted.nii.gz" "$WORK/mni_hull.surf.gii" --sigma 2
 $GEN bulb "$WORK/bulb.surf.gii"
+$GEN labels "$WHITE" "$LABEL" "$WORK/label_" --seed 1
 
 # run NAME COMMAND...: one row (the map's metrics JSON is $WORK/NAME.json).
 run() {
@@ -63,4 +65,10 @@ done
 echo "sphere (closed surfaces; 64x32 elements):"
 for m in white noise01 noise03 decimated85 voxel05 voxel10 mni_hull bulb; do
   run "sphere_$m" sphere "$WORK/$m.surf.gii" "$WORK/sphere_$m.surf.gii"
+done
+echo "flatten with other cortex labels (fs741 white and pial; 0/1 masks, cleaned up as FreeSurfer labels are):"
+for l in grown2 grown5 shrunk3 shrunk10 ragged cut12mm; do
+  for s in white pial; do
+    run "labels_${l}_$s" flatten "$SHARED/fs741/lh.$s.surf.gii" "$WORK/flat_${l}_$s.surf.gii" --label "$WORK/label_$l.txt"
+  done
 done

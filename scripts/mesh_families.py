@@ -12,6 +12,13 @@ for bench/bench_mesh_families.sh and the tests that check Authalic's maps beyond
                                                                  white matter (p > 0.5, Gaussian sigma)
   mesh_families.py bulb OUT                                     an ellipsoid with a 3 mm bulb on a
                                                                  1.2 mm neck (a known failure, docs/robustness.md)
+  mesh_families.py labels SURFACE LABEL OUT_PREFIX --seed N     other cortex labels of the same surface
+                                                                 (0/1 text masks OUT_PREFIX<name>.txt), as
+                                                                 other subjects' and pipelines' labels differ:
+                                                                 grown by 2 and 5 vertex rings, shrunk by 3
+                                                                 and 10, a ragged border (random bites, 6
+                                                                 rounds), and a 12 mm ball cut out of the
+                                                                 cortex (holes the cleanup fills)
 
 With LABEL (FreeSurfer .label of SURFACE's vertices), OUT's label (OUT with .label for .surf.gii)
 holds the output vertices whose nearest input vertex is in it. Outputs are GIFTI, RAS mm, faces
@@ -189,6 +196,37 @@ def bulb(a):
     write_surface(a.out, V, F)
 
 
+def labels(a):
+    import scipy.sparse as sp
+    V, F = read_surface(a.surface)
+    n = len(V)
+    inside = np.zeros(n, bool)
+    inside[np.loadtxt(a.label, skiprows=2, ndmin=2)[:, 0].astype(int)] = True
+    i = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
+    j = np.concatenate([F[:, 1], F[:, 2], F[:, 0]])
+    A = sp.csr_matrix((np.ones(2 * len(i)), (np.concatenate([i, j]), np.concatenate([j, i]))), shape=(n, n))
+
+    def grow(mask, rings):
+        for _ in range(rings):
+            mask = mask | (A @ mask.astype(float) > 0)
+        return mask
+
+    def shrink(mask, rings):
+        return ~grow(~mask, rings)
+
+    rng = np.random.default_rng(a.seed)
+    ragged = inside.copy()
+    for _ in range(6):  # half of the border vertices, at random, six times
+        border = np.flatnonzero(ragged & (A @ (~ragged).astype(float) > 0))
+        ragged[rng.choice(border, len(border) // 2, replace=False)] = False
+    centre = rng.choice(np.flatnonzero(shrink(inside, 30)))
+    variants = {"grown2": grow(inside, 2), "grown5": grow(inside, 5), "shrunk3": shrink(inside, 3),
+                "shrunk10": shrink(inside, 10), "ragged": ragged,
+                "cut12mm": inside & (np.linalg.norm(V - V[centre], axis=1) > 12)}
+    for name, mask in variants.items():
+        np.savetxt(a.out_prefix + name + ".txt", mask.astype(int), fmt="%d")
+
+
 def label_path(out):
     return out[: -len(".surf.gii")] + ".label" if out.endswith(".surf.gii") else out + ".label"
 
@@ -206,6 +244,8 @@ def main():
     s = sub.add_parser("hull"); s.add_argument("gm"); s.add_argument("wm"); s.add_argument("out")
     s.add_argument("--sigma", type=float, default=2.0); s.set_defaults(run=hull)
     s = sub.add_parser("bulb"); s.add_argument("out"); s.set_defaults(run=bulb)
+    s = sub.add_parser("labels"); s.add_argument("surface"); s.add_argument("label"); s.add_argument("out_prefix")
+    s.add_argument("--seed", type=int, default=1); s.set_defaults(run=labels)
     a = p.parse_args()
     a.run(a)
 
