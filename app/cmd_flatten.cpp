@@ -359,7 +359,7 @@ struct FlattenTimes {
 // The metrics JSON (--metrics, --json): the map, its initial map, flow, distortion and acceptance.
 nlohmann::json flatten_json(const FlattenArgs& a, const SquareMapResult& r, const SquareMapOptions& options,
                             const FlattenRegion& region, double scale, const MapMetrics& final_metrics,
-                            const std::string& problem, const nlohmann::json& correspondence, const FlattenTimes& t) {
+                            const nlohmann::json& acceptance, const nlohmann::json& correspondence, const FlattenTimes& t) {
   nlohmann::json j = {{"surface", a.surface},
                       {"region", region.source},
                       {"output", a.out},
@@ -386,7 +386,7 @@ nlohmann::json flatten_json(const FlattenArgs& a, const SquareMapResult& r, cons
   if (region.cleanup) j["region_cleanup"] = region_cleanup_json(*region.cleanup);
   j["transport"] = transport_json(r, options);
   j["correspondence"] = correspondence;
-  j["acceptance"] = acceptance_json(problem, "32x32");
+  j["acceptance"] = acceptance;
   j["initial_map"]["stretch_energy"] = {{"iterations", r.stretch.iterations},
                                         {"face_ln_stretch_abs_mean_before", r.stretch.initial_log_stretch},
                                         {"face_ln_stretch_abs_mean_after", r.stretch.final_log_stretch}};
@@ -494,7 +494,8 @@ void run(const FlattenArgs& a) {
 
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const FlattenTimes times{seconds_map, clock.seconds("initial"), clock.seconds("stretch") + clock.seconds("flow"), seconds};
-  nlohmann::json j = flatten_json(a, r, options, region, scale, final_metrics, problem, correspondence, times);
+  nlohmann::json j =
+      flatten_json(a, r, options, region, scale, final_metrics, acceptance_json(problem, accept_metrics, plain), correspondence, times);
   j["domain"] = a.domain;
   if (a.domain == "disk")
     j["disk"] = {{"carry", "Shirley & Chiu's concentric map of the square map (area x pi/4 everywhere)"},

@@ -152,7 +152,7 @@ nlohmann::json sphere_json(const SphereArgs& a, const TriMesh& mesh, const Spher
                       {"flips", r.flips},
                       {"metrics", metrics_json(final_metrics)},
                       {"seconds", {{"conformal", t.conformal}, {"flow", t.flow}, {"total", t.total}}}};
-  j["acceptance"] = acceptance_json(problem, "64x32");
+  j["acceptance"] = acceptance_json(problem, final_metrics, true);
   j["refine"] = a.refine;
   if (options.square_route.square.optimal_transport && r.route == SphereRoute::Square) {
     const OptimalTransportReport& ot = r.square_route.square_transport;
@@ -241,7 +241,7 @@ void setup(CLI::App& parent) {
       "authalic square map of all but a 10 % cap, carried to the sphere by equal-area maps, then a per-face polish on "
       "the sphere (--route flow: Haker's conformal map, Moebius centring, Moser's flow). Orientation: +x right, "
       "+y anterior, +z superior. "
-      "A map that fails its acceptance (0 flipped faces, element CV <= 0.01 at 64x32, per-vertex mean |ln area ratio| "
+      "A map that fails its acceptance (0 flipped faces, element CV <= 0.01 at 64x32 (on a coarse mesh up to 0.3 / sqrt(faces per element)), per-vertex mean |ln area ratio| "
       "<= 0.01) is an error: exit code 3, nothing written.");
   sub->add_option("SURFACE", a->surface, "Closed genus-0 surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, MNI .obj, STL), mm")->required();
   sub->add_option("OUT", a->out, "Output sphere surface (GIFTI .surf.gii), same vertices and triangles as SURFACE")->required();

@@ -18,13 +18,19 @@ nlohmann::json stats_json(const AbsStats& s) {
 }
 }  // namespace
 
-nlohmann::json acceptance_json(const std::string& problem, const std::string& grid) {
+nlohmann::json acceptance_json(const std::string& problem, const MapMetrics& accepted, bool element_cv_checked) {
   const AuthalicAcceptance limits;
+  const std::string grid = std::to_string(accepted.element_cols) + "x" + std::to_string(accepted.element_rows);
+  nlohmann::json cv = nullptr;
+  if (element_cv_checked) cv = element_cv_limit(accepted, limits);
   return {{"passed", problem.empty()},
           {"problem", problem},
           {"limits",
            {{"flips", 0},
-            {"element_cv_" + grid, limits.max_element_cv},
+            {"element_cv_" + grid, cv},
+            {"element_cv_rule", "max(" + std::to_string(limits.max_element_cv).substr(0, 4) + ", 3 x " +
+                                    std::to_string(limits.coarse_face_sd).substr(0, 3) +
+                                    " / sqrt(faces per element)): looser only on coarse meshes, whose elements hold few faces"},
             {"vertex_ln_area_abs_mean", limits.max_vertex_ln_area}}}};
 }
 

@@ -17,8 +17,10 @@ namespace authalic::app {
 nlohmann::json metrics_json(const MapMetrics& m);
 
 // The acceptance record of a map (core/metrics.h): passed, the problem ("" if passed) and the
-// limits, the element CV's on the grid named by `grid` (e.g. "32x32").
-nlohmann::json acceptance_json(const std::string& problem, const std::string& grid);
+// limits applied to `accepted` (the metrics the acceptance measured): the element CV's on its grid
+// (e.g. "element_cv_32x32"), the coarse-mesh limit where that is larger (with the rule that gives
+// it), or null when the element CV is not checked (a measure-controlled map).
+nlohmann::json acceptance_json(const std::string& problem, const MapMetrics& accepted, bool element_cv_checked);
 
 // The flow's report and the options it ran with (flatten's and rectangle's "flow" object).
 nlohmann::json flow_json(const FlowReport& r, const FlowOptions& o);

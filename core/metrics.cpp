@@ -243,14 +243,17 @@ MapMetrics map_metrics(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F,
   return m;
 }
 
-std::string authalic_acceptance_problem(const MapMetrics& m, double vertex_mean, bool check_element_cv,
-                                        const AuthalicAcceptance& limits) {
+double element_cv_limit(const MapMetrics& m, const AuthalicAcceptance& limits) {
   // On a coarse mesh an element holds few triangles, and its area varies by their triangle-level
   // noise: allow 3 standard errors of a good map's noise (a fixed SD, so a broken map cannot
   // loosen its own limit).
   const double faces_per_element = double(m.faces) / std::max(1, m.element_cols * m.element_rows);
-  const double cv_limit =
-      std::max(limits.max_element_cv, 3.0 * limits.coarse_face_sd / std::sqrt(std::max(1.0, faces_per_element)));
+  return std::max(limits.max_element_cv, 3.0 * limits.coarse_face_sd / std::sqrt(std::max(1.0, faces_per_element)));
+}
+
+std::string authalic_acceptance_problem(const MapMetrics& m, double vertex_mean, bool check_element_cv,
+                                        const AuthalicAcceptance& limits) {
+  const double cv_limit = element_cv_limit(m, limits);
   const bool cv_bad = check_element_cv && !(m.element_cv <= cv_limit);
   const bool vertex_bad = !(vertex_mean <= limits.max_vertex_ln_area);
   if (m.flips == 0 && !cv_bad && !vertex_bad) return {};

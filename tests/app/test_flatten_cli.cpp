@@ -53,6 +53,10 @@ TEST(FlattenCli, B1MeetsTheRequirementsAndKeepsTheInputsVertices) {
   EXPECT_LE(mm.at("vertex_ln_area_abs").at("p99").get<double>(), 0.04);
   EXPECT_LE(mm.at("face_ln_area_abs").at("mean").get<double>(), 0.06);
   EXPECT_GT(j.at("initial_metrics").at("element_cv").get<double>(), 0.3);  // the conformal start is not
+  // The limit the acceptance applied: B1's 18,654 region faces give 18 per element of 32 x 32,
+  // whose triangle-level noise allows 3 x 0.1 / sqrt(18.2) = 0.070 (core/metrics.h).
+  EXPECT_NEAR(j.at("acceptance").at("limits").at("element_cv_32x32").get<double>(),
+              0.3 / std::sqrt(mm.at("faces").get<double>() / 1024.0), 1e-12);
 
   // Layout (issue 15 item 1): exactly the input's 10,242 vertices, in order; the region's 18,654
   // faces, with the few dividing edges flipped (not split), so per-vertex files pair with the map.
@@ -237,6 +241,30 @@ TEST(FlattenCli, CivetStyleMniObjWithATextMaskGivesTheMapOfTheSameSurfaceInGifti
   const authalic::io::Surface a = authalic::io::read_surface(dir + "/civet.surf.gii"), b = authalic::io::read_surface(dir + "/gifti.surf.gii");
   EXPECT_EQ(a.mesh.F, b.mesh.F);
   EXPECT_EQ(a.mesh.V, b.mesh.V);
+}
+
+// Measure control (--density): elements are meant to hold different cortical areas, so the
+// acceptance does not check their CV, and the metrics say so (null limit) instead of a limit the
+// map visibly exceeds.
+TEST(FlattenCli, MeasureControlledMapRecordsThatTheElementCvIsNotChecked) {
+  const std::string src = AUTHALIC_SOURCE_DIR;
+  const std::string dir = authalic::test::temp_dir("flatten_density");
+  const authalic::io::Surface s = authalic::io::read_surface(src + "/sample_data/surf/lh.white");
+  const double mid = s.mesh.V.col(1).mean();
+  {
+    std::ofstream density(dir + "/density.txt");
+    for (int v = 0; v < s.mesh.num_vertices(); ++v) density << (s.mesh.V(v, 1) > mid ? 3.0 : 1.0) << "\n";
+  }
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " flatten " + src + "/sample_data/surf/lh.white " + dir + "/o.surf.gii --label " + src +
+                            "/sample_data/label/lh.cortex.label --density " + dir + "/density.txt --metrics " + dir + "/m.json -q",
+                        &output),
+            0)
+      << output;
+  const auto j = read_json(dir + "/m.json");
+  EXPECT_EQ(j.at("acceptance").at("passed"), true);
+  EXPECT_TRUE(j.at("acceptance").at("limits").at("element_cv_32x32").is_null());
+  EXPECT_GT(j.at("metrics").at("element_cv").get<double>(), 0.2);  // the anterior cortex gets a third of the area per unit
 }
 
 TEST(FlattenCli, RefusesAClosedSurfaceWithoutARegionAndWritesNothing) {

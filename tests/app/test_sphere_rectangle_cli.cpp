@@ -180,6 +180,13 @@ TEST(SphereCli, WhiteLeftMeetsTheIssueRequirements) {
   EXPECT_EQ(m.at("element_grid"), nlohmann::json({64, 32}));
   EXPECT_LE(m.at("element_cv").get<double>(), 0.01);
   EXPECT_LE(m.at("face_ln_area_abs").at("mean").get<double>(), 0.06);
+  // The acceptance records the limit it applied: fsaverage5's 20,480 faces give 10 per element,
+  // whose triangle-level noise allows up to 3 x 0.1 / sqrt(10) = 0.095 (core/metrics.h).
+  const auto& acceptance = j.at("acceptance");
+  EXPECT_EQ(acceptance.at("passed"), true);
+  const double per_element = m.at("faces").get<double>() / (64 * 32);
+  EXPECT_NEAR(acceptance.at("limits").at("element_cv_64x32").get<double>(), 0.3 / std::sqrt(per_element), 1e-12);
+  EXPECT_GT(acceptance.at("limits").at("element_cv_64x32").get<double>(), 0.09);
   // The flow did the work: the conformal start is far from equal-area (measured CV ~0.87).
   EXPECT_GT(j.at("conformal_metrics").at("element_cv").get<double>(), 0.5);
   EXPECT_EQ(j.at("conformal_flips"), 0);
