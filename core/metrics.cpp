@@ -243,12 +243,16 @@ MapMetrics map_metrics(const MatrixXd& V, const MatrixXd& UV, const MatrixXi& F,
   return m;
 }
 
-double element_cv_limit(const MapMetrics& m, const AuthalicAcceptance& limits) {
+double element_cv_limit(long long faces, int elements, const AuthalicAcceptance& limits) {
   // On a coarse mesh an element holds few triangles, and its area varies by their triangle-level
   // noise: allow 3 standard errors of a good map's noise (a fixed SD, so a broken map cannot
   // loosen its own limit).
-  const double faces_per_element = double(m.faces) / std::max(1, m.element_cols * m.element_rows);
+  const double faces_per_element = double(faces) / std::max(1, elements);
   return std::max(limits.max_element_cv, 3.0 * limits.coarse_face_sd / std::sqrt(std::max(1.0, faces_per_element)));
+}
+
+double element_cv_limit(const MapMetrics& m, const AuthalicAcceptance& limits) {
+  return element_cv_limit(m.faces, m.element_cols * m.element_rows, limits);
 }
 
 std::string authalic_acceptance_problem(const MapMetrics& m, double vertex_mean, bool check_element_cv,

@@ -62,6 +62,8 @@ struct AuthalicAcceptance {
 // The element-CV limit the acceptance applies to metrics m: limits.max_element_cv, or on a
 // coarse mesh (few faces per element) 3 x coarse_face_sd / sqrt(faces per element) if larger.
 double element_cv_limit(const MapMetrics& m, const AuthalicAcceptance& limits = {});
+// The same for a map of `faces` faces on a grid of `elements` elements.
+double element_cv_limit(long long faces, int elements, const AuthalicAcceptance& limits = {});
 // Empty when the map passes: 0 flipped triangles, element CV and per-vertex error within the
 // limits (vertex_mean: the per-vertex mean |ln ratio| against the map's target measure, e.g. the
 // flow's report; check_element_cv false for a measure-controlled map, whose elements are meant to

@@ -77,6 +77,22 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   // labels), the findings in words, and the PDF beside the HTML.
   EXPECT_NE(html.str().find("Hypometabolism in left precuneus"), std::string::npos) << "the sample's clusters are named by region";
   EXPECT_TRUE(fs::exists(report.parent_path() / ("sub-" + id[1].str() + "_report.pdf")));
+  // Quality flags: each map's element CV beside the limit its acceptance applied (on the sample's
+  // coarse meshes looser than 0.01: 3 x 0.1 / sqrt(faces per element), core/metrics.h).
+  const std::string page = html.str();
+  const std::regex quality("^0 flipped triangles, element-area CV ([0-9.]+) at 32x32 \\(accepted: 0 flips, CV &lt;= ([0-9.]+) at 32x32\\)");
+  int rows = 0;
+  for (std::size_t at = page.find("square map</"); at != std::string::npos; at = page.find("square map</", at + 1)) {
+    const std::size_t cell = page.find("<td>", at);
+    ASSERT_NE(cell, std::string::npos);
+    std::smatch m;
+    const std::string text = page.substr(cell + 4, 200);
+    if (!std::regex_search(text, m, quality)) continue;  // the map's name elsewhere on the page
+    ++rows;
+    EXPECT_LE(std::stod(m[1].str()), std::stod(m[2].str()));
+    EXPECT_GT(std::stod(m[2].str()), 0.01);
+  }
+  EXPECT_EQ(rows, 2) << "one quality row per hemisphere";
 
   // Provenance (issue 15 items 5 and 9): the output folder is a BIDS derivative dataset, and each
   // sidecar records the command line as run and the inputs by the path given, with checksums.
