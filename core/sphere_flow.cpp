@@ -338,7 +338,7 @@ MatrixXd sphere_step_positions(const MatrixXd& S, const MatrixXi& F, const Matri
 }  // namespace
 
 double polish_sphere_face_areas(MatrixXd& S, const MatrixXi& F, const VectorXd& measure, int iterations,
-                                int cg_iterations, int local_iterations) {
+                                int cg_iterations, int local_iterations, const ProgressFn& progress) {
   const Eigen::Index nv = S.rows();
   VectorXd a;
   double err = sphere_face_error(S, F, measure, &a);
@@ -363,10 +363,11 @@ double polish_sphere_face_areas(MatrixXd& S, const MatrixXi& F, const VectorXd& 
   const std::vector<char> all(static_cast<std::size_t>(nv), 1);
   for (int it = 0; it < iterations; ++it) {
     const double before = err;
-    if (!line_search(sphere_polish_direction(S, F, measure, a, all, cg_iterations),
-                     [&](const VectorXd&, double e) { return e < err; }) ||
-        err > 0.99 * before)
-      break;
+    const bool stepped = line_search(sphere_polish_direction(S, F, measure, a, all, cg_iterations),
+                                     [&](const VectorXd&, double e) { return e < err; });
+    report(progress, "polish", double(it + 1) / iterations,
+           "sphere polish " + std::to_string(it + 1) + ": per-face mean |ln ratio| " + std::to_string(before) + " -> " + std::to_string(err));
+    if (!stepped || err > 0.99 * before) break;
   }
   // Then local steps about the faces still beyond e^±0.5 of their share, the vertices whose
   // regional error exceeds 5 % (regional_log_area_ratio), and 3 rings around them, judged on
@@ -413,6 +414,9 @@ double polish_sphere_face_areas(MatrixXd& S, const MatrixXi& F, const VectorXd& 
                                      });
     if (!stepped) break;
     slow_in_a_row = after > 0.99 * before ? slow_in_a_row + 1 : 0;
+    report(progress, "polish", -1,
+           "sphere polish, local step " + std::to_string(it + 1) + " (" + std::to_string(local.size()) + " faces): their error " +
+               std::to_string(before) + " -> " + std::to_string(after));
     if (slow_in_a_row == kLocalSlowSteps) break;
   }
   return err;

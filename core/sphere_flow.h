@@ -102,8 +102,9 @@ int sphere_flipped_faces_stored(const MatrixXd& S, const MatrixXi& F);
 // iterations: global steps (at most; they stop when a step removes less than 1 % of the error);
 // local_iterations: the local steps about the faces still far from their share that follow (at
 // most; they stop when three steps in a row each remove less than 1 % of their faces' error).
+// progress: one line per global step, and one for the local steps (stage "polish").
 // Output: S moved. Returns the area-weighted mean |ln(A_f / T_f)| at the end.
 double polish_sphere_face_areas(MatrixXd& S, const MatrixXi& F, const VectorXd& face_measure, int iterations = 8,
-                                int cg_iterations = 50, int local_iterations = 40);
+                                int cg_iterations = 50, int local_iterations = 40, const ProgressFn& progress = {});
 
 }  // namespace authalic

@@ -246,7 +246,8 @@ MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const Sphe
     if (sphere_flipped_faces(S, F) > 0) repair_sphere_flips(S, F);
   }
   const int cg = opt.polish_cg_iterations > 0 ? opt.polish_cg_iterations : sphere_polish_cg_iterations(F.rows());
-  R.polish_face_error = polish_sphere_face_areas(S, F, measure, opt.polish_iterations, cg);
+  report(progress, "sphere", -1, "per-face polish on the sphere");
+  R.polish_face_error = polish_sphere_face_areas(S, F, measure, opt.polish_iterations, cg, 40, progress);
   open_thin_sphere_triangles(S, F);
   {
     std::ostringstream msg;
