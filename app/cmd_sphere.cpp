@@ -241,8 +241,8 @@ void setup(CLI::App& parent) {
       "authalic square map of all but a 10 % cap, carried to the sphere by equal-area maps, then a per-face polish on "
       "the sphere (--route flow: Haker's conformal map, Moebius centring, Moser's flow). Orientation: +x right, "
       "+y anterior, +z superior. "
-      "A map that fails its acceptance (0 flipped faces, element CV <= 0.01 at 64x32, or 0.3 / sqrt(faces per element) where larger, per-vertex mean |ln area ratio| "
-      "<= 0.01) is an error: exit code 3, nothing written.");
+      "A map that fails its acceptance (0 flipped faces, element CV <= 0.01 at 64x32, or 0.3 / sqrt(faces per element) "
+      "where larger, per-vertex mean |ln area ratio| <= 0.01) is an error: exit code 3, nothing written.");
   sub->add_option("SURFACE", a->surface, "Closed genus-0 surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, MNI .obj, STL), mm")->required();
   sub->add_option("OUT", a->out, "Output sphere surface (GIFTI .surf.gii), same vertices and triangles as SURFACE")->required();
   sub->add_option("--metrics", a->metrics, "Write distortion metrics (JSON; areas in mm^2, element grid 64 x 32)");

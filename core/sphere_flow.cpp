@@ -366,7 +366,8 @@ double polish_sphere_face_areas(MatrixXd& S, const MatrixXi& F, const VectorXd& 
     const bool stepped = line_search(sphere_polish_direction(S, F, measure, a, all, cg_iterations),
                                      [&](const VectorXd&, double e) { return e < err; });
     report(progress, "polish", double(it + 1) / iterations,
-           "sphere polish " + std::to_string(it + 1) + ": per-face mean |ln ratio| " + std::to_string(before) + " -> " + std::to_string(err));
+           "sphere polish " + std::to_string(it + 1) + ": per-face mean |ln ratio| " + std::to_string(before) + " -> " +
+               std::to_string(err));
     if (!stepped || err > 0.99 * before) break;
   }
   // Then local steps about the faces still beyond e^±0.5 of their share, the vertices whose

@@ -124,7 +124,8 @@ class BinaryValues final : public MniObjValues {
   }
   void finish() override {
     if (pos_ != bytes_.size())
-      fail(path_, "binary object ends at byte " + str(pos_) + " of " + str(bytes_.size()), "the file holds more than one object, or is corrupt");
+      fail(path_, "binary object ends at byte " + str(pos_) + " of " + str(bytes_.size()),
+           "the file holds more than one object, or is corrupt");
   }
 
  private:
@@ -161,7 +162,8 @@ u64 checked_count(MniObjValues& in, const char* what, u64 cap, const std::string
   const long long n = in.integer(what);
   if (n < 0) fail(path, std::string(what) + " is negative (" + std::to_string(n) + ")", kCorrupt);
   if (static_cast<u64>(n) > cap)
-    fail(path, std::string(what) + " is " + std::to_string(n) + ", more than the " + str(cap) + " accepted", "the file is not a cortical surface");
+    fail(path, std::string(what) + " is " + std::to_string(n) + ", more than the " + str(cap) + " accepted",
+         "the file is not a cortical surface");
   return static_cast<u64>(n);
 }
 
@@ -177,7 +179,8 @@ bool looks_like_mni_obj(const std::string& bytes) {
 TriMesh parse_mni_obj(const std::string& bytes, const std::string& path) {
   if (bytes.empty()) fail(path, "the file is empty", "give a surface file");
   const char type = bytes[0];
-  if (type == 'L' || type == 'l') fail(path, "is an MNI line object (tracts or contours), not a polygon surface", "give a surface (.obj starting with 'P')");
+  if (type == 'L' || type == 'l')
+    fail(path, "is an MNI line object (tracts or contours), not a polygon surface", "give a surface (.obj starting with 'P')");
   if (type != 'P' && type != 'p') fail(path, "is not an MNI polygon object (first byte is not 'P' or 'p')", "give an MNI .obj surface");
   AsciiValues ascii(bytes, path);
   std::unique_ptr<BinaryValues> binary;
@@ -188,18 +191,23 @@ TriMesh parse_mni_obj(const std::string& bytes, const std::string& path) {
     binary = std::make_unique<BinaryValues>(bytes, path, !native);
   }
   MniObjValues& in = binary ? static_cast<MniObjValues&>(*binary) : ascii;
+  // A count is corrupt, not allocated, when its items cannot fit: each ASCII number takes at least
+  // a digit and a separator (binary ones 4 bytes), so a point and its normal at least 12 bytes.
+  auto require_room = [&](u64 count, u64 bytes_each, const char* what) {
+    if (count * bytes_each > bytes.size())
+      fail(path, "declares " + str(count) + " " + what + ", more than its " + str(bytes.size()) + " bytes can hold", kCorrupt);
+  };
 
   for (int k = 0; k < 5; ++k) in.number("surface property");
   const u64 n_points = checked_count(in, "point count", g_max_vtk_vertices, path);
-  // At least two characters per ASCII number (and four bytes per binary one), six per point.
-  if (n_points * 6 > bytes.size()) fail(path, "declares " + str(n_points) + " points, more than its " + str(bytes.size()) + " bytes can hold", kCorrupt);
+  require_room(n_points, 12, "points");
   TriMesh mesh;
   mesh.V.resize(static_cast<Eigen::Index>(n_points), 3);
   for (u64 i = 0; i < n_points; ++i)
     for (int c = 0; c < 3; ++c) mesh.V(static_cast<Eigen::Index>(i), c) = in.number("point coordinate");
   for (u64 i = 0; i < 3 * n_points; ++i) in.number("normal");
   const u64 n_items = checked_count(in, "polygon count", g_max_vtk_faces, path);
-  if (n_items * 2 > bytes.size()) fail(path, "declares " + str(n_items) + " polygons, more than its " + str(bytes.size()) + " bytes can hold", kCorrupt);
+  require_room(n_items, 2, "polygons");
   const long long flag = in.integer("colour flag");
   if (flag < 0 || flag > 2) fail(path, "colour flag is " + std::to_string(flag) + " (0, 1 or 2 expected)", kCorrupt);
   const u64 n_colours = flag == 0 ? 1 : flag == 1 ? n_items : n_points;
@@ -216,7 +224,7 @@ TriMesh parse_mni_obj(const std::string& bytes, const std::string& path) {
     if (static_cast<u64>(e) > 3 * g_max_vtk_faces) fail(path, "polygon end index " + std::to_string(e) + " is too large", kCorrupt);
     previous = end[i] = static_cast<u64>(e);
   }
-  if (previous * 2 > bytes.size()) fail(path, "declares " + str(previous) + " polygon corners, more than its " + str(bytes.size()) + " bytes can hold", kCorrupt);
+  require_room(previous, 2, "polygon corners");
   std::vector<int> corner(previous);
   for (u64 k = 0; k < previous; ++k) {
     const long long v = in.integer("polygon corner");
