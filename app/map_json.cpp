@@ -23,14 +23,15 @@ nlohmann::json acceptance_json(const std::string& problem, const MapMetrics& acc
   const std::string grid = std::to_string(accepted.element_cols) + "x" + std::to_string(accepted.element_rows);
   nlohmann::json cv = nullptr;
   if (element_cv_checked) cv = element_cv_limit(accepted, limits);
+  std::ostringstream rule;  // default precision: "max(0.01, 3 x 0.1 / ...)"
+  rule << "max(" << limits.max_element_cv << ", 3 x " << limits.coarse_face_sd
+       << " / sqrt(faces per element)): looser only on coarse meshes, whose elements hold few faces";
   return {{"passed", problem.empty()},
           {"problem", problem},
           {"limits",
            {{"flips", 0},
             {"element_cv_" + grid, cv},
-            {"element_cv_rule", "max(" + std::to_string(limits.max_element_cv).substr(0, 4) + ", 3 x " +
-                                    std::to_string(limits.coarse_face_sd).substr(0, 3) +
-                                    " / sqrt(faces per element)): looser only on coarse meshes, whose elements hold few faces"},
+            {"element_cv_rule", rule.str()},
             {"vertex_ln_area_abs_mean", limits.max_vertex_ln_area}}}};
 }
 

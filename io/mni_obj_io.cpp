@@ -18,7 +18,6 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -58,18 +57,14 @@ class AsciiValues final : public MniObjValues {
   double number(const char* what) override {
     const std::string_view tok = next(what);
     double v = 0;
-    const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
-    if (ec != std::errc() || ptr != tok.data() + tok.size() || !std::isfinite(v) || std::fabs(v) > 1e30)
-      fail(path_, "line " + str(line_) + ": " + what + " '" + std::string(tok.substr(0, 40)) + "' is not a finite number", kCorrupt);
+    if (!parse_finite(tok, v))
+      fail(path_, "line " + str(line_) + ": " + what + " " + quoted(tok) + " is not a finite number", kCorrupt);
     return v;
   }
   long long integer(const char* what) override {
-    std::string_view tok = next(what);
-    if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
+    const std::string_view tok = next(what);
     long long v = 0;
-    const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
-    if (ec != std::errc() || ptr != tok.data() + tok.size() || tok.empty())
-      fail(path_, "line " + str(line_) + ": " + what + " '" + std::string(tok.substr(0, 40)) + "' is not an integer", kCorrupt);
+    if (!parse_integer(tok, v)) fail(path_, "line " + str(line_) + ": " + what + " " + quoted(tok) + " is not an integer", kCorrupt);
     return v;
   }
   void colour(const char* what) override {

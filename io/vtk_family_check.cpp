@@ -20,6 +20,32 @@ namespace authalic::io::detail {
 std::size_t g_max_vtk_vertices = 50'000'000;
 std::size_t g_max_vtk_faces = 100'000'000;
 
+// A whole token as a double (strtod must consume all of it).
+bool parse_number(std::string_view tok, double& out) {
+  char buf[72];
+  if (tok.empty() || tok.size() >= sizeof(buf)) return false;
+  std::memcpy(buf, tok.data(), tok.size());
+  buf[tok.size()] = '\0';
+  char* end = nullptr;
+  out = std::strtod(buf, &end);
+  return end == buf + tok.size();
+}
+
+// Coordinates and other values that must be finite and of a sane magnitude.
+bool parse_finite(std::string_view tok, double& out) {
+  return parse_number(tok, out) && std::isfinite(out) && std::fabs(out) <= 1e30;
+}
+
+bool parse_integer(std::string_view tok, long long& out) {
+  if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
+  const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), out);
+  return ec == std::errc() && ptr == tok.data() + tok.size() && !tok.empty();
+}
+
+std::string quoted(std::string_view tok) {
+  return "'" + std::string(tok.substr(0, 40)) + (tok.size() > 40 ? "...'" : "'");
+}
+
 namespace {
 
 using u64 = std::uint64_t;
@@ -72,28 +98,6 @@ class Lines {
   bool terminated_ = false;
 };
 
-// A whole token as a double (strtod must consume all of it).
-bool parse_number(std::string_view tok, double& out) {
-  char buf[72];
-  if (tok.empty() || tok.size() >= sizeof(buf)) return false;
-  std::memcpy(buf, tok.data(), tok.size());
-  buf[tok.size()] = '\0';
-  char* end = nullptr;
-  out = std::strtod(buf, &end);
-  return end == buf + tok.size();
-}
-
-// Coordinates and other values that must be finite and of a sane magnitude.
-bool parse_finite(std::string_view tok, double& out) {
-  return parse_number(tok, out) && std::isfinite(out) && std::fabs(out) <= 1e30;
-}
-
-bool parse_integer(std::string_view tok, long long& out) {
-  if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
-  const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), out);
-  return ec == std::errc() && ptr == tok.data() + tok.size() && !tok.empty();
-}
-
 // A non-negative count from a header.
 bool parse_count(std::string_view tok, u64& out) {
   long long v = 0;
@@ -102,9 +106,6 @@ bool parse_count(std::string_view tok, u64& out) {
   return true;
 }
 
-std::string quoted(std::string_view tok) {
-  return "'" + std::string(tok.substr(0, 40)) + (tok.size() > 40 ? "...'" : "'");
-}
 
 // ---- PLY ---------------------------------------------------------------------------------
 

@@ -5,6 +5,7 @@
 // Every function throws an InputError naming `path` for input VTK would crash on or misread.
 #include <cstddef>
 #include <string>
+#include <string_view>
 
 namespace authalic::io::detail {
 
@@ -12,6 +13,14 @@ namespace authalic::io::detail {
 // have < 1M). The fuzz targets lower them to stay below libFuzzer's memory limit.
 extern std::size_t g_max_vtk_vertices;
 extern std::size_t g_max_vtk_faces;
+
+// Tokens of the text formats (these checks and io/mni_obj_io.cpp): a whole token as a double
+// (strtod must consume all of it); the same, finite and within +-1e30; a whole token as an
+// integer (a leading '+' allowed); a token quoted for a message (cut after 40 characters).
+bool parse_number(std::string_view tok, double& out);
+bool parse_finite(std::string_view tok, double& out);
+bool parse_integer(std::string_view tok, long long& out);
+std::string quoted(std::string_view tok);
 
 // PLY header and body layout: element counts against the file size, then one walk over the
 // body (binary: every list length; ASCII: one line per element with numbers only; faces: at
