@@ -54,7 +54,7 @@ struct FlattenArgs {
   int omt_grid = 0;
   int omt_iterations = OptimalTransportOptions{}.max_iterations;
   double max_memory = -1;  // GB; < 0: 75% of the physical RAM
-  long long max_vertices = 300000;
+  long long max_vertices = 1000000;
 };
 
 const char* kOrientationRule =
@@ -263,14 +263,15 @@ FlattenRegion read_region(const FlattenArgs& a, const io::Surface& surface) {
 void check_region_size(const FlattenArgs& a, const MatrixXi& region) {
   // A disk has about F / 2 vertices.
   check_memory(a.surface, (region.rows() + 2) / 2, square_map_memory_bytes((region.rows() + 2) / 2, GridFlowOptions{a.grid}.cells()), a.max_memory);
-  // The default limit is a time limit: 600k vertices (fsaverage5 subdivided three times) map with 0
-  // flips, element CV 0.0001, in 29 s CPU and 1.1 GB (bench/bench_peers.sh), while the 150k of a
-  // native hemisphere take 5-7 s. Larger regions are refused up front unless asked for (issue 13
-  // asks 15 s at 600k before the default is raised).
+  // The default limit is a time limit (hostile or mistaken inputs are caught by the memory
+  // estimate above): 600k vertices (fsaverage5 subdivided three times) map with 0 flips in 26 s
+  // CPU and 1.2 GB (bench/bench_peers.sh), a marching-cubes surface of fs741's white matter at
+  // 0.4 mm (887k region vertices) in 47 s CPU and 1.8 GB with 0 flips (bench/bench_mesh_families.sh):
+  // a high-resolution FreeSurfer subject (0.7-0.8 mm, 250-350k vertices) must not be refused.
   if ((region.rows() + 2) / 2 > a.max_vertices)
     throw InputError(a.surface + ": the region has about " + std::to_string((region.rows() + 2) / 2) +
                      " vertices, more than the " + std::to_string(a.max_vertices) +
-                     " accepted (larger regions map slowly: 600k vertices take about 30 s); decimate the "
+                     " accepted (larger regions map slowly: 1M vertices take about a minute and 2 GB); decimate the "
                      "surface (e.g. FreeSurfer's mris_decimate) or raise --max-vertices");
 }
 
@@ -635,7 +636,7 @@ void setup(CLI::App& parent) {
   sub->add_option("--atlas-faces-from", a->atlas_faces_from, "Atlas cortex as the faces of this surface (e.g. its flat patch)");
   add_max_memory_option(*sub, &a->max_memory);
   sub->add_option("--max-vertices", a->max_vertices,
-                  "Largest region (vertices) accepted; larger ones work but slowly (600k: about 30 s CPU, 1.1 GB)")
+                  "Largest region (vertices) accepted; larger ones work but slowly (1M: about a minute of CPU, 2 GB)")
       ->capture_default_str();
   add_common_options(*sub);
   sub->callback([a]() { run(*a); });

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Maps of mesh families FreeSurfer does not write, made from the real data (scripts/mesh_families.py):
 # the native white surface with coordinate noise, decimated by VTK's quadric decimation, voxelised
-# and remeshed by marching cubes (as surfaces from a segmentation are), MNI152's whole-brain
+# and remeshed by marching cubes at 0.4, 0.5 and 1 mm (as surfaces from a segmentation are; 0.4 mm: ~1M
+# vertices, the size of the default --max-vertices), MNI152's whole-brain
 # surface, and a synthetic bulb on a narrow neck; and the native white and pial surfaces with other
 # cortex labels (grown, shrunk, ragged, a ball cut out), as other subjects' labels differ. For each: `flatten` of its cortex (the label
 # carried over by nearest vertex) and `sphere` of the closed surface, with exit code, flips,
@@ -30,6 +31,7 @@ $GEN noise "$WHITE" "$WORK/noise03.surf.gii" --sigma 0.3 --seed 1
 cp "$LABEL" "$WORK/noise01.label"
 cp "$LABEL" "$WORK/noise03.label"
 for r in 50 85 95; do $GEN decimate "$WHITE" "$LABEL" "$WORK/decimated$r.surf.gii" --reduction "0.$r"; done
+$GEN voxelise "$WHITE" "$LABEL" "$WORK/voxel04.surf.gii" --voxel 0.4
 $GEN voxelise "$WHITE" "$LABEL" "$WORK/voxel05.surf.gii" --voxel 0.5
 $GEN voxelise "$WHITE" "$LABEL" "$WORK/voxel10.surf.gii" --voxel 1.0
 $GEN hull "${MNI}_gm_tal_nlin_sym_09a_converted.nii.gz" "${MNI}_wm_tal_nlin_sym_09a_converted.nii.gz" "$WORK/mni_hull.surf.gii" --sigma 2
@@ -57,10 +59,10 @@ PYEOF
 }
 
 vertices() { $PY -c 'import nibabel, sys; print(len(nibabel.load(sys.argv[1]).darrays[0].data))' "$1"; }
-echo "mesh families (vertices): $(for m in white noise01 noise03 decimated50 decimated85 decimated95 voxel05 voxel10 mni_hull bulb; do echo -n "$m $(vertices "$WORK/$m.surf.gii"), "; done)"
-echo "flatten (cortex label carried by nearest vertex; 32x32 elements):"
-for m in white noise01 noise03 decimated50 decimated85 decimated95 voxel05 voxel10; do
-  run "flatten_$m" flatten "$WORK/$m.surf.gii" "$WORK/flat_$m.surf.gii" --label "$WORK/$m.label" --max-vertices 1000000
+echo "mesh families (vertices): $(for m in white noise01 noise03 decimated50 decimated85 decimated95 voxel04 voxel05 voxel10 mni_hull bulb; do echo -n "$m $(vertices "$WORK/$m.surf.gii"), "; done)"
+echo "flatten (cortex label carried by nearest vertex; 32x32 elements; default --max-vertices, 1M):"
+for m in white noise01 noise03 decimated50 decimated85 decimated95 voxel04 voxel05 voxel10; do
+  run "flatten_$m" flatten "$WORK/$m.surf.gii" "$WORK/flat_$m.surf.gii" --label "$WORK/$m.label"
 done
 echo "sphere (closed surfaces; 64x32 elements):"
 for m in white noise01 noise03 decimated85 voxel05 voxel10 mni_hull bulb; do
