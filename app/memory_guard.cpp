@@ -16,13 +16,16 @@ namespace authalic::app {
 namespace {
 
 // Peak resident set size measured with /usr/bin/time -v (Release build, 2 cores; docs/robustness.md,
-// "Memory"). Square map (`authalic flatten`, region vertices n):
-//   B1 (n = 9,465) 69.6 MB, B3 (149,233) 316.2 MB, B4 = B1 subdivided 3 times (596,929) 2,360.7 MB:
-//   superlinear (sparse factor fill-in), fitted by 70 MB + 5.7 n^1.5 bytes; used: 70 MB + 6.0 n^1.5.
+// "Memory"). Square map (`authalic flatten`, region vertices n), 2 threads, 2026-12-07:
+//   B3 (n = 149,233) 362 MB, fs741 white remeshed at 0.6 mm (393k) 923 MB, B1 subdivided three
+//   times (596,929) 1,399 MB, remeshed at 0.4 mm (887k) 1,843 MB: 70 MB + 2.0-2.2 kB per vertex
+//   (the supernodal factor's fill grows as n log n, slowly); used: 70 MB + 3.0 kB/vertex, at
+//   least 1.33x every measurement. (Until 2026-12-07: 70 MB + 6.0 n^1.5 bytes, fitted when the
+//   factorisations were simplicial: B1 x3 took 2.36 GB then; it overestimated 887k 2.7x.)
 // Sphere map (`authalic sphere`): S1 (10,242) 82.3 MB, S3 (163,842) 270.9 MB, S4 (655,362) 770.1 MB:
 //   at most 70 MB + 1,228 bytes/vertex; used: 90 MB + 1,550 bytes/vertex.
-constexpr double kSquareFixed = 70e6;        // bytes: executable, libraries, grid fields at 512^2
-constexpr double kSquarePerVertex15 = 6.0;   // bytes per region vertex^1.5
+constexpr double kSquareFixed = 70e6;       // bytes: executable, libraries, grid fields at 512^2
+constexpr double kSquarePerVertex = 3000;   // bytes per region vertex
 constexpr double kSphereFixed = 90e6;
 constexpr double kSpherePerVertex = 1550;
 
@@ -62,7 +65,7 @@ double square_map_memory_bytes(long long vertices, int grid_resolution, double w
   // The grid flow keeps ~8 double fields of (W r) x r cells; 512^2 is part of kSquareFixed.
   const double cells = width * grid_resolution * static_cast<double>(grid_resolution);
   const double extra_grid = std::max(0.0, cells - 512.0 * 512.0) * 8 * sizeof(double);
-  return kSquareFixed + extra_grid + kSquarePerVertex15 * std::pow(static_cast<double>(vertices), 1.5);
+  return kSquareFixed + extra_grid + kSquarePerVertex * static_cast<double>(vertices);
 }
 
 double sphere_map_memory_bytes(long long vertices) { return kSphereFixed + kSpherePerVertex * static_cast<double>(vertices); }
