@@ -89,6 +89,38 @@ std::vector<double> read_array(const nlohmann::json& j, const char* key, std::si
   return out;
 }
 
+// "subject_values": one array of num_values() numbers (or null) per subject, whose finite values
+// count, element by element, to n; anything else is a corrupt file.
+std::vector<std::vector<double>> read_subject_values(const nlohmann::json& j, const NormativeReference& r, const std::string& path) {
+  const std::size_t size = static_cast<std::size_t>(r.num_values());
+  const std::size_t rows = std::min(r.subjects.size(), kMaxChanceControls);
+  if (!j.is_array() || j.size() != rows)
+    throw InputError(path + ": subject_values must hold one array for each of the first " + std::to_string(rows) +
+                     " subjects; the reference file is corrupt");
+  std::vector<std::vector<double>> out;
+  std::vector<double> count(size, 0.0);
+  for (const auto& row : j) {
+    if (!row.is_array() || row.size() != size)
+      throw InputError(path + ": subject_values[" + std::to_string(out.size()) + "] does not hold " + std::to_string(size) +
+                       " values; the reference file is corrupt");
+    std::vector<double> v(size, kNaN);
+    for (std::size_t i = 0; i < size; ++i) {
+      if (row[i].is_null()) continue;
+      if (!row[i].is_number())
+        throw InputError(path + ": subject_values[" + std::to_string(out.size()) + "][" + std::to_string(i) + "] is not a number");
+      v[i] = row[i].get<double>();
+      if (std::isfinite(v[i])) ++count[i];
+    }
+    out.push_back(std::move(v));
+  }
+  for (std::size_t i = 0; i < size && rows == r.subjects.size(); ++i)
+    if (count[i] != r.n[i])
+      throw InputError(path + ": element " + std::to_string(i) + " has " + std::to_string(static_cast<long long>(r.n[i])) +
+                       " controls but " + std::to_string(static_cast<long long>(count[i])) +
+                       " values in subject_values; the reference file is corrupt");
+  return out;
+}
+
 }  // namespace
 
 std::string format_value(double v) {
@@ -136,6 +168,9 @@ void add_subject(NormativeReference& r, const ElementTable& table, const std::st
     r.comoment.clear();
   }
   const int ne = r.grid.num_elements();
+  // The values are kept while the first subjects' all are (not after a reference without them).
+  const bool keep_values = r.keeps_values() && r.subject_values.size() < kMaxChanceControls;
+  std::vector<double> values(static_cast<std::size_t>(r.num_values()), kNaN);
   for (std::size_t b = 0; b < table.blocks.size(); ++b)
     for (int e = 0; e < ne; ++e) {
       const double y = table.blocks[b].elements[static_cast<std::size_t>(e)].value;
@@ -158,8 +193,42 @@ void add_subject(NormativeReference& r, const ElementTable& table, const std::st
         r.comoment[i] += da * (y - r.mean[i]);
       }
       r.n[i] = n1;
+      values[i] = y;
     }
   r.subjects.push_back({table.subject_id, table.age, source});
+  if (keep_values) r.subject_values.push_back(std::move(values));
+}
+
+NormativeReference leave_one_out(const NormativeReference& reference, std::size_t s) {
+  if (s >= reference.subjects.size() || s >= reference.subject_values.size())
+    throw std::out_of_range("leave_one_out: the reference has no values of subject " + std::to_string(s));
+  NormativeReference r = reference;
+  r.subject_values.clear();
+  const std::vector<double>& y = reference.subject_values[s];
+  const double a = reference.subjects[s].age;
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    if (!std::isfinite(y[i])) continue;
+    // add_subject's Welford step undone: mean' = mean - (y - mean) / (n - 1), M2' = M2 - (y - mean')
+    // (y - mean), and with the age C' = C - (a - mean_a') (y - mean), age M2' likewise.
+    const double n1 = r.n[i] - 1;
+    if (n1 <= 0) {
+      r.n[i] = r.mean[i] = r.m2[i] = 0;
+      if (r.age_model) r.age_mean[i] = r.age_m2[i] = r.comoment[i] = 0;
+      continue;
+    }
+    const double mean_y = r.mean[i], mean_y0 = mean_y - (y[i] - mean_y) / n1;
+    r.m2[i] = std::max(0.0, r.m2[i] - (y[i] - mean_y0) * (y[i] - mean_y));
+    r.mean[i] = mean_y0;
+    if (r.age_model) {
+      const double mean_a = r.age_mean[i], mean_a0 = mean_a - (a - mean_a) / n1;
+      r.age_m2[i] = std::max(0.0, r.age_m2[i] - (a - mean_a0) * (a - mean_a));
+      r.comoment[i] -= (a - mean_a0) * (y[i] - mean_y);
+      r.age_mean[i] = mean_a0;
+    }
+    r.n[i] = n1;
+  }
+  r.subjects.erase(r.subjects.begin() + static_cast<std::ptrdiff_t>(s));
+  return r;
 }
 
 NormativeReference merge_references(const NormativeReference& a, const NormativeReference& b, const std::string& a_name,
@@ -169,6 +238,13 @@ NormativeReference merge_references(const NormativeReference& a, const Normative
   NormativeReference r = a;
   r.software = software_version();
   r.subjects.insert(r.subjects.end(), b.subjects.begin(), b.subjects.end());
+  // The first subjects' values: a's, then b's (each side keeps its first ones), as a build of all.
+  if (a.keeps_values() && b.keeps_values()) {
+    for (std::size_t k = 0; k < b.subject_values.size() && r.subject_values.size() < kMaxChanceControls; ++k)
+      r.subject_values.push_back(b.subject_values[k]);
+  } else {
+    r.subject_values.clear();  // one side has no values: no chance clusters for the merged reference
+  }
   r.age_model = a.age_model && b.age_model;
   if (!r.age_model) {
     r.age_mean.clear();
@@ -255,7 +331,9 @@ std::string reference_to_json(const NormativeReference& r) {
       "sum (age - age_mean)(value - mean), the sufficient statistics of a linear age model. Arrays run over "
       "the hemisphere blocks in the order listed, then element id = row * cols + col (row 0 at the bottom "
       "of the domain). References merge exactly (Chan et al. pairwise formulas): authalic normative merge. "
-      "partial = true: a piece for merging (fewer than 3 controls allowed), refused by compare.";
+      "partial = true: a piece for merging (fewer than 3 controls allowed), refused by compare. subject_values: "
+      "each control's element values (subjects order; null = no value), from which a comparison measures the "
+      "controls' chance clusters (leave-one-out) and gives each cluster of a patient its p.";
   j["domain"] = to_string(r.grid.domain);
   j["k"] = r.grid.k;
   j["rows"] = r.grid.rows;
@@ -282,6 +360,15 @@ std::string reference_to_json(const NormativeReference& r) {
   for (int i = 0; i < r.num_values(); ++i) sd.push_back(number_or_null(r.sd(i)));
   e["sd"] = sd;
   j["elements"] = e;
+  if (!r.subjects.empty() && r.keeps_values()) {
+    nlohmann::json values = nlohmann::json::array();
+    for (const auto& v : r.subject_values) {
+      nlohmann::json row = nlohmann::json::array();
+      for (double x : v) row.push_back(number_or_null(x));
+      values.push_back(std::move(row));
+    }
+    j["subject_values"] = std::move(values);
+  }
   return j.dump(1) + "\n";
 }
 
@@ -332,6 +419,7 @@ NormativeReference reference_from_json(const std::string& text, const std::strin
           !(r.m2[i] >= 0))
         throw InputError(path + ": element " + std::to_string(i) + " has inconsistent statistics (n " + std::to_string(r.n[i]) +
                          ", m2 " + std::to_string(r.m2[i]) + "); the file is corrupt");
+    if (j.contains("subject_values")) r.subject_values = read_subject_values(j["subject_values"], r, path);
   } catch (const nlohmann::json::exception& ex) {
     throw InputError(path + ": invalid normative reference (" + std::string(ex.what()) + ")");
   }
@@ -455,9 +543,10 @@ void rescale_to_reference(Comparison& out, const std::vector<double>& value, dou
   out.scale_elements = used;
   out.scale_rounds = round;
 }
-}  // namespace
 
-Comparison compare_to_reference(const NormativeReference& ref, const ElementTable& patient, const CompareOptions& options) {
+// z, flags and clusters of one table against one reference (compare_to_reference without the
+// chance clusters).
+Comparison compare_elements(const NormativeReference& ref, const ElementTable& patient, const CompareOptions& options) {
   check_compatible(ref, patient, patient.subject_id.empty() ? std::string("patient table") : "patient " + patient.subject_id);
   if (!(options.threshold > 0)) throw InputError("--threshold: must be > 0 (|z| flagged as abnormal)");
   if (ref.partial)
@@ -548,6 +637,7 @@ Comparison compare_to_reference(const NormativeReference& ref, const ElementTabl
       c.elements.push_back(e);
       c.area_mm2 += el.area_mm2;
       c.mean_z += z;
+      c.mass += std::abs(z) - options.threshold;
       if (c.peak_element < 0 || std::abs(z) > std::abs(c.peak_z)) {
         c.peak_z = z;
         c.peak_element = e;
@@ -572,6 +662,57 @@ Comparison compare_to_reference(const NormativeReference& ref, const ElementTabl
     c.id = static_cast<int>(k) + 1;
     for (int e : c.elements) out.cluster[static_cast<std::size_t>(c.block) * static_cast<std::size_t>(ne) + static_cast<std::size_t>(e)] = c.id;
   }
+  return out;
+}
+
+// Each control compared, as a patient, with the reference of the others (its own age, the
+// patient's options and seam): the mass of its largest hypo and hyper cluster. Then each of
+// the patient's clusters gets its count and p (normative.h, "Chance clusters").
+void measure_chance_clusters(const NormativeReference& ref, const ElementTable& patient, const CompareOptions& options, Comparison& out) {
+  const std::size_t controls = ref.subject_values.size();  // the first kMaxChanceControls at most
+  if (!ref.keeps_values() || controls == 0) {
+    out.chance_note = "the reference does not keep its controls' values (built before 2026-12-07, or merged with such a "
+                      "reference): rebuild it to measure the controls' chance clusters";
+    return;
+  }
+  if (ref.subjects.size() < static_cast<std::size_t>(kMinControls) + 1) {
+    out.chance_note = "the reference has " + std::to_string(ref.subjects.size()) + " controls; leaving one out needs at least " +
+                      std::to_string(kMinControls + 1);
+    return;
+  }
+  const int ne = ref.grid.num_elements();
+  CompareOptions each = options;
+  each.chance_clusters = false;
+  for (std::size_t s = 0; s < controls; ++s) {
+    ElementTable control = patient;  // the patient's grid, blocks and seam, with the control's values
+    control.subject_id = ref.subjects[s].id;
+    control.age = ref.subjects[s].age;
+    each.age = ref.subjects[s].age;
+    for (std::size_t b = 0; b < control.blocks.size(); ++b)
+      for (int e = 0; e < ne; ++e)
+        control.blocks[b].elements[static_cast<std::size_t>(e)].value =
+            ref.subject_values[s][b * static_cast<std::size_t>(ne) + static_cast<std::size_t>(e)];
+    double largest[2] = {0, 0};  // hypo, hyper
+    for (const ElementCluster& c : compare_elements(leave_one_out(ref, s), control, each).clusters) {
+      double& l = largest[c.sign < 0 ? 0 : 1];
+      l = std::max(l, c.mass);
+    }
+    out.control_mass_hypo.push_back(largest[0]);
+    out.control_mass_hyper.push_back(largest[1]);
+  }
+  for (ElementCluster& c : out.clusters) {
+    const std::vector<double>& largest = c.sign < 0 ? out.control_mass_hypo : out.control_mass_hyper;
+    const double m = c.mass;
+    c.controls_as_large = static_cast<int>(std::count_if(largest.begin(), largest.end(), [m](double l) { return l >= m; }));
+    c.p_controls = (1.0 + c.controls_as_large) / (1.0 + static_cast<double>(largest.size()));
+  }
+}
+
+}  // namespace
+
+Comparison compare_to_reference(const NormativeReference& ref, const ElementTable& patient, const CompareOptions& options) {
+  Comparison out = compare_elements(ref, patient, options);
+  if (options.chance_clusters) measure_chance_clusters(ref, patient, options, out);
   return out;
 }
 
@@ -617,6 +758,7 @@ std::string comparison_summary_json(const NormativeReference& ref, const std::st
                  {"hypo", cmp.num_hypo},
                  {"hyper", cmp.num_hyper}};
   j["clusters"] = nlohmann::json::parse(clusters_json(cmp.clusters));
+  j["chance_clusters"] = nlohmann::json::parse(chance_clusters_json(cmp));
   j["notes"] = cmp.notes;
   j["outputs"] = {{"z_nifti", paths.z_nifti}, {"z_png", paths.z_png}, {"abnormal_csv", paths.abnormal_csv},
                   {"summary_json", paths.summary_json}, {"z_func", paths.z_func}};
@@ -636,8 +778,26 @@ std::string clusters_json(const std::vector<ElementCluster>& clusters) {
                              {"peak_element", c.peak_element},
                              {"peak_row", c.peak_row},
                              {"peak_col", c.peak_col},
-                             {"peak_ras_mm", {number_or_null(c.peak_ras.x()), number_or_null(c.peak_ras.y()), number_or_null(c.peak_ras.z())}}});
+                             {"peak_ras_mm", {number_or_null(c.peak_ras.x()), number_or_null(c.peak_ras.y()), number_or_null(c.peak_ras.z())}},
+                             {"mass", c.mass},
+                             {"controls_as_large", c.controls_as_large >= 0 ? nlohmann::json(c.controls_as_large) : nlohmann::json(nullptr)},
+                             {"p_controls", number_or_null(c.p_controls)}});
   return a.dump();
+}
+
+std::string chance_clusters_json(const Comparison& cmp) {
+  if (cmp.control_mass_hypo.empty()) return nlohmann::json({{"measured", false}, {"reason", cmp.chance_note}}).dump();
+  return nlohmann::json({{"measured", true},
+                         {"controls", cmp.control_mass_hypo.size()},
+                         {"largest_hypo_mass", cmp.control_mass_hypo},
+                         {"largest_hyper_mass", cmp.control_mass_hyper},
+                         {"definition", "each control compared with the reference of the other controls (leave-one-out), "
+                                        "same threshold, rescaling and age model; per control the mass of its largest "
+                                        "hypo and hyper cluster (mass = sum over the elements of |z| - threshold; Bullmore "
+                                        "et al. 1999). A cluster's p_controls = (1 + controls_as_large) / (1 + controls), "
+                                        "controls_as_large = the controls whose largest cluster of its sign has at least its "
+                                        "mass (max statistic, Nichols & Holmes 2002)"}})
+      .dump();
 }
 
 ComparisonOutputPaths comparison_output_paths(const std::string& prefix, const std::vector<std::string>& hemispheres,

@@ -8,7 +8,8 @@
 //
 // Statistics. Per element, over the controls whose value there is finite: n, mean and M2 (sum of
 // squared deviations) by Welford's online update, so a reference is built streaming, one table
-// at a time, in memory independent of the number of subjects. When every control has an age, the
+// at a time, in memory independent of the number of subjects (the values kept for the chance
+// clusters, below, stop growing at kMaxChanceControls subjects). When every control has an age, the
 // age's mean and M2 and the co-moment C = sum (a - mean_a)(y - mean_y) are kept as well: the
 // sufficient statistics of the least-squares line y = mean_y + beta (a - mean_a), beta = C / M2_a,
 // residual variance (M2_y - C^2 / M2_a) / (n - 2). Two references merge exactly with Chan, Golub &
@@ -17,6 +18,27 @@
 //     C = C_A + C_B + delta_a delta_y n_A n_B / n,
 // so references built on separate machines and merged equal the reference of all their subjects
 // up to floating-point reassociation.
+//
+// Chance clusters. With |z| >= 2 a healthy subject has ~5 % of its elements flagged, and
+// neighbouring elements are correlated, so chance clusters of several elements are normal. The
+// reference therefore also keeps each control's element values (subject_values), and a comparison
+// measures how large the chance clusters get: each control is compared, as a patient, with the
+// reference of the other controls (leave-one-out: the Welford update undone for its values), and
+// the mass of its largest hypo and of its largest hyper cluster is kept. A cluster's mass is the
+// sum over its elements of |z| - threshold (Bullmore et al., IEEE TMI 1999): a smooth healthy
+// variation can flag as many elements as a lesion, but only just beyond the threshold (the sample
+// phantom: one control's largest hypo cluster has 55 elements or more, as many as the planted
+// region's, but the controls' masses stay below 63, against 168 and 125 for patient01's two planted
+// regions). A patient's cluster of mass m gets p = (1 + controls whose largest cluster of
+// its sign has mass >= m) / (1 + controls): the maximum statistic of permutation tests (Nichols &
+// Holmes, Hum. Brain Mapp. 2002), with the controls as the draws from the null, so p is corrected
+// for the number of elements and clusters looked at. With 20 controls the smallest p is 1/21 = 0.048.
+// The values of the first kMaxChanceControls subjects are kept (a reference of 1,000 controls would
+// otherwise grow with them; 100 draws resolve p to 0.01), and their leave-one-out references are
+// the whole reference without each of them. Each control is judged against n - 1 controls and the
+// patient against n, so p is conservative, noticeably so for small references (a reference of 5 of the sample's controls gives patient01's
+// largest clusters p of 0.67 and more, as 4-control references have heavy-tailed z-scores; all 20
+// give its two planted regions 0.048).
 //
 // Sign convention. z = (patient - expected) / SD, so hypometabolism gives negative z and an
 // element is flagged abnormal at z <= -threshold (hypo) or z >= +threshold (hyper). NEUROSTAT/3D-SSP
@@ -30,9 +52,12 @@
 //    "normalisation": "global", "units": "...", "correspondence": "per-subject" | "atlas <id>", "num_subjects": N, "age_model": true,
 //    "subjects": [{"id": "...", "age": 61.0 | null, "table": "path"}],
 //    "elements": {"n": [...], "mean": [...], "m2": [...], "age_mean": [...], "age_m2": [...],
-//                 "age_value_comoment": [...], "sd": [...]}}
+//                 "age_value_comoment": [...], "sd": [...]},
+//    "subject_values": [[...], ...]}   (one array per subject, null where it had no value; absent in
+//                                       files written before 2026-12-07, which compare without p)
 // Arrays run over hemisphere blocks in the listed order, then element id (row * cols + col);
 // "sd" is derived (sqrt(m2 / (n - 1))) for readers, and ignored when reading.
+#include <algorithm>
 #include <limits>
 #include <string>
 #include <vector>
@@ -55,6 +80,8 @@ struct NormativeSubject {
 inline constexpr int kMinControls = 3;
 // Element values beyond this magnitude are refused when building a reference (their squares
 // overflow the sums of squares).
+// Controls whose element values a reference keeps for the chance clusters: the first ones.
+inline constexpr std::size_t kMaxChanceControls = 100;
 inline constexpr double kMaxReferenceValue = 1e15;
 
 struct NormativeReference {
@@ -71,6 +98,12 @@ struct NormativeReference {
   bool partial = false;                  // built for merging (normative build --partial): not for comparing
   // Per element (hemispheres.size() * grid.num_elements()):
   std::vector<double> n, mean, m2;       // n stored as double (exact below 2^53)
+  // The values of the first min(subjects, kMaxChanceControls) subjects (in `subjects` order; NaN
+  // where one had none), for the chance clusters (see the top of this file). Empty when a reference
+  // without them was read or merged in.
+  std::vector<std::vector<double>> subject_values;
+  // Whether subject_values holds what it should (not the case after a reference without them).
+  bool keeps_values() const { return subject_values.size() == std::min(subjects.size(), kMaxChanceControls); }
   std::vector<double> age_mean, age_m2, comoment;  // empty when !age_model
   int num_values() const { return static_cast<int>(hemispheres.size()) * grid.num_elements(); }
   // Sample SD of element i (NaN for n < 2).
@@ -98,6 +131,10 @@ std::string reference_to_json(const NormativeReference& reference);
 NormativeReference reference_from_json(const std::string& text, const std::string& path);
 void write_reference(const std::string& path, const NormativeReference& reference);  // atomic
 NormativeReference read_reference(const std::string& path);
+// The reference without subject s (its values' Welford update undone), for leave-one-out
+// comparisons: its statistics, without subject_values. std::out_of_range for a subject whose
+// values it does not keep.
+NormativeReference leave_one_out(const NormativeReference& reference, std::size_t s);
 // Elements with at least min_subjects controls and a finite SD > 0.
 int usable_elements(const NormativeReference& reference, int min_subjects);
 // Throws InputError("<what>: ...") for a reference a comparison cannot use: fewer than kMinControls
@@ -128,6 +165,9 @@ struct CompareOptions {
   // normal elements only takes that bias out; for a healthy subject s stays within ~1 % of 1.
   // false: the values as they are (the global normalisation alone).
   bool rescale = true;
+  // Measure the chance clusters of the controls (leave-one-out, see the top of this file) and give
+  // each cluster its p; needs a reference with subject_values and at least kMinControls + 1 controls.
+  bool chance_clusters = true;
 };
 
 struct ElementCluster {
@@ -141,6 +181,11 @@ struct ElementCluster {
   double mean_z = 0.0;
   int peak_element = -1, peak_row = -1, peak_col = -1;
   Eigen::Vector3d peak_ras = Eigen::Vector3d::Zero();  // centroid of the peak element, scanner RAS mm
+  double mass = 0.0;             // sum over its elements of |z| - threshold
+  // Chance clusters (CompareOptions::chance_clusters): the controls whose largest cluster of this
+  // sign has at least this mass, and p = (1 + that) / (1 + controls); -1 and NaN when not measured.
+  int controls_as_large = -1;
+  double p_controls = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct Comparison {
@@ -159,12 +204,18 @@ struct Comparison {
   double patient_age = std::numeric_limits<double>::quiet_NaN();
   int num_compared = 0, num_hypo = 0, num_hyper = 0, num_without_z = 0;
   double threshold = 2.0;
+  // Chance clusters: per control (leave-one-out), the mass of its largest hypo and hyper cluster
+  // (0: none); empty when not measured (chance_note says why).
+  std::vector<double> control_mass_hypo, control_mass_hyper;
+  std::string chance_note;
   std::vector<std::string> notes;
 };
 
 // z-scores, flags and clusters. Clusters join abnormal elements of the same sign that touch
 // (8-neighbourhood): on the rectangle not across the hemisphere seam (between columns K-1 and K);
-// on the sphere wrapping in longitude (column cols-1 touches column 0); never across blocks.
+// on the sphere wrapping in longitude (column cols-1 touches column 0); never across blocks. Then,
+// with options.chance_clusters, the controls' chance clusters and each cluster's p (the controls
+// are given the patient's seam: the reference does not keep theirs).
 Comparison compare_to_reference(const NormativeReference& reference, const ElementTable& patient,
                                 const CompareOptions& options = {});
 
@@ -196,8 +247,12 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
                                                const std::string& patient_path, const Comparison& comparison,
                                                const std::vector<VectorXi>& vertex_elements);
 // The clusters as a JSON array (id, hemisphere, sign, num_elements, area_mm2, peak_z, mean_z,
-// peak element/row/col, peak_ras_mm): the summary's "clusters" and `run --json`'s.
+// peak element/row/col, peak_ras_mm, mass, controls_as_large, p_controls): the summary's "clusters" and
+// `run --json`'s.
 std::string clusters_json(const std::vector<ElementCluster>& clusters);
+// The chance clusters of a comparison as JSON: per control the mass of its largest hypo and hyper
+// cluster, the definition of p, or why they were not measured.
+std::string chance_clusters_json(const Comparison& comparison);
 // The summary JSON document written above (also printed by --json).
 std::string comparison_summary_json(const NormativeReference& reference, const std::string& reference_path,
                                     const ElementTable& patient, const std::string& patient_path,

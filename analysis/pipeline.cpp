@@ -334,12 +334,19 @@ MapMetrics rectangle_step(const Hemisphere (&hemis)[2], const RunOptions& option
 // comparison's order (largest first); columns described by clusters_tsv_sidecar.
 std::string clusters_tsv(const std::vector<ElementCluster>& clusters) {
   std::ostringstream s;
-  s << "cluster\themisphere\tdirection\telements\tarea_mm2\tpeak_z\tmean_z\tpeak_row\tpeak_col\tpeak_x_mm\tpeak_y_mm\tpeak_z_mm\n";
+  s << "cluster\themisphere\tdirection\telements\tarea_mm2\tpeak_z\tmean_z\tpeak_row\tpeak_col\tpeak_x_mm\tpeak_y_mm\tpeak_z_mm\t"
+       "mass\tcontrols_as_large\tp_controls\n";
   s << std::setprecision(6);
-  for (const ElementCluster& c : clusters)
+  for (const ElementCluster& c : clusters) {
     s << c.id << '\t' << c.hemisphere << '\t' << (c.sign < 0 ? "hypo" : "hyper") << '\t' << c.elements.size() << '\t'
       << c.area_mm2 << '\t' << c.peak_z << '\t' << c.mean_z << '\t' << c.peak_row << '\t' << c.peak_col << '\t' << c.peak_ras.x()
-      << '\t' << c.peak_ras.y() << '\t' << c.peak_ras.z() << '\n';
+      << '\t' << c.peak_ras.y() << '\t' << c.peak_ras.z() << '\t' << c.mass << '\t';
+    // BIDS tabular files write a missing value as n/a.
+    if (c.controls_as_large >= 0)
+      s << c.controls_as_large << '\t' << c.p_controls << '\n';
+    else
+      s << "n/a\tn/a\n";
+  }
   return s.str();
 }
 
@@ -361,7 +368,13 @@ json clusters_tsv_sidecar(double threshold) {
           {"peak_col", col("element column of the peak")},
           {"peak_x_mm", col("centroid of the peak element, scanner RAS x", "mm")},
           {"peak_y_mm", col("centroid of the peak element, scanner RAS y", "mm")},
-          {"peak_z_mm", col("centroid of the peak element, scanner RAS z", "mm")}};
+          {"peak_z_mm", col("centroid of the peak element, scanner RAS z", "mm")},
+          {"mass", col("cluster mass: the sum over its elements of |z| - threshold")},
+          {"controls_as_large", col("controls (each compared with the other controls, leave-one-out) whose largest cluster of "
+                                    "this direction has at least this mass; n/a when not measured")},
+          {"p_controls", col("(1 + controls_as_large) / (1 + controls): the cluster's p against the controls' chance "
+                             "clusters (maximum statistic, corrected for the elements and clusters looked at); n/a when "
+                             "not measured")}};
 }
 
 // The element images' space, for their sidecars (write_element_nifti's header convention).
@@ -532,7 +545,10 @@ void name_findings(ReportData& rd, const Hemisphere (&hemis)[2], const Compariso
     r.region = share.name;
     r.region_fraction = share.fraction;
     if (c.peak_element >= 0) r.peak_region = majority_region(hemis[b].regions, vertices[b][c.peak_element]).name;
-    findings.push_back({r.sign, r.hemisphere, r.region.empty() ? "cortex" : r.region, r.peak_z, r.area_mm2});
+    r.controls_as_large = c.controls_as_large;
+    r.controls = static_cast<int>(cmp.control_mass_hypo.size());
+    r.p_controls = c.p_controls;
+    findings.push_back({r.sign, r.hemisphere, r.region.empty() ? "cortex" : r.region, r.peak_z, r.area_mm2, r.controls_as_large, r.controls});
     rd.clusters.push_back(r);
   }
   rd.region_method = hemis[0].regions.method;
@@ -557,6 +573,17 @@ ReportNormative report_normative(const NormativeReference& reference, const Subj
   n.description = fs::path(in.normative).filename().string() + ", built by " + reference.software;
   n.threshold = options.z_threshold;
   n.min_cluster_elements = options.min_cluster_elements;
+  n.chance_clusters = cmp.control_mass_hypo.empty()
+                          ? "p not measured: " + cmp.chance_note
+                          : "p: against chance clusters in the " + std::to_string(cmp.control_mass_hypo.size()) +
+                                " controls, each compared with the others (leave-one-out): (1 + controls with a cluster of "
+                                "the same direction and at least the mass, sum of |z| - " + format_fixed(cmp.threshold, 1) +
+                                ") / (1 + controls); corrected for the number of elements and clusters looked at";
+  n.chance_clusters_short = cmp.control_mass_hypo.empty()
+                                ? "p: not measured (the reference keeps no control values)"
+                                : "p: against the largest chance cluster (mass: sum of |z| - " + format_fixed(cmp.threshold, 1) +
+                                      ") of each of the " + std::to_string(cmp.control_mass_hypo.size()) +
+                                      " controls, compared with the others";
   if (cmp.rescaled) {
     char buf[160];
     std::snprintf(buf, sizeof(buf), "x %.4f, fitted on the %d elements with |z| < %.1f", cmp.scale, cmp.scale_elements,

@@ -180,6 +180,31 @@ std::vector<RegionRow> regional_table(const std::string& hemisphere, const Parce
   return rows;
 }
 
+namespace {
+// "; against chance clusters in the 20 controls: 2 of the 6 clusters (left precuneus, right
+// cuneus) are larger than in every control (p = 0.048)" (or "none of the 6 clusters is"; "the
+// cluster is"); "" when not measured.
+std::string chance_clause(const std::vector<const Finding*>& of) {
+  const int controls = of.front()->controls;
+  if (controls <= 0 || of.front()->controls_as_large < 0) return "";
+  int beyond = 0;
+  std::vector<std::string> places;
+  for (const Finding* f : of)
+    if (f->controls_as_large == 0) {
+      ++beyond;
+      const std::string place = f->hemisphere + " " + readable_region(f->region);
+      if (std::find(places.begin(), places.end(), place) == places.end()) places.push_back(place);
+    }
+  const std::string p = format_fixed(1.0 / (1.0 + controls), 3);
+  std::string text = "; against chance clusters in the " + std::to_string(controls) + " controls: ";
+  if (of.size() == 1)
+    return text + "the cluster is " + (beyond ? "larger than in every control (p = " + p + ")" : "not larger than in every control");
+  if (beyond == 0) return text + "none of the " + std::to_string(of.size()) + " clusters is larger than in every control";
+  return text + std::to_string(beyond) + " of the " + std::to_string(of.size()) + " clusters (" + joined(places) + ") " +
+         (beyond == 1 ? "is" : "are") + " larger than in every control (p = " + p + ")";
+}
+}  // namespace
+
 std::string findings_summary(const std::vector<Finding>& findings, double threshold, int min_elements) {
   std::string text;
   const char* kWords[2][2] = {{"hypo", "Hypometabolism"}, {"hyper", "Hypermetabolism"}};
@@ -209,7 +234,7 @@ std::string findings_summary(const std::vector<Finding>& findings, double thresh
     }
     text += std::string(word) + " in " + joined(places) + " (" + std::to_string(of.size()) + " cluster" +
             (of.size() == 1 ? "" : "s") + ", " + with_thousands(area) + " mm\u00b2), peak z " + format_fixed(peak->peak_z, 1, true) +
-            " in " + peak->hemisphere + " " + readable_region(peak->region) + ".";
+            " in " + peak->hemisphere + " " + readable_region(peak->region) + chance_clause(of) + ".";
   }
   return text;
 }

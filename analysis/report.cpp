@@ -185,7 +185,8 @@ void clusters_section(std::ostringstream& out, const ReportData& d) {
         << ".</p>\n";
   } else {
     out << "<table>\n<tr><th>#</th><th>hemisphere</th><th>type</th><th>region (share of vertices)</th><th>peak region</th>"
-           "<th>elements</th><th>area (mm&#178;)</th><th>peak z</th><th>mean z</th><th>peak RAS (mm)</th></tr>\n";
+           "<th>elements</th><th>area (mm&#178;)</th><th>peak z</th><th>mean z</th><th>peak RAS (mm)</th>"
+           "<th>controls with one as large (p)</th></tr>\n";
     for (const auto& c : d.clusters) {
       out << "<tr><td class=\"num\">" << c.id << "</td><td>" << html_escape(c.hemisphere) << "</td><td>"
           << html_escape(c.sign == "hypo" ? "hypometabolism" : c.sign == "hyper" ? "hypermetabolism" : c.sign) << "</td><td>"
@@ -193,11 +194,17 @@ void clusters_section(std::ostringstream& out, const ReportData& d) {
           << "</td><td class=\"num\">" << c.num_elements << "</td><td class=\"num\">" << fixed(c.area_mm2, 0)
           << "</td><td class=\"num\">" << format_fixed(c.peak_z, 1, true) << "</td><td class=\"num\">"
           << format_fixed(c.mean_z, 1, true) << "</td><td class=\"num\">" << fixed(c.peak_ras[0], 0) << ", "
-          << fixed(c.peak_ras[1], 0) << ", " << fixed(c.peak_ras[2], 0) << "</td></tr>\n";
+          << fixed(c.peak_ras[1], 0) << ", " << fixed(c.peak_ras[2], 0) << "</td><td class=\"num\">"
+          << (c.controls_as_large >= 0 ? std::to_string(c.controls_as_large) + " of " + std::to_string(c.controls) + " (" +
+                                             fixed(c.p_controls, 3) + ")"
+                                       : std::string("&#8212;"))
+          << "</td></tr>\n";
     }
     out << "</table>\n";
     out << "<p class=\"muted\">Clusters: connected elements with |z| &#8805; " << thr << ", at least "
-        << d.normative.min_cluster_elements << " element" << (d.normative.min_cluster_elements == 1 ? "" : "s") << ".</p>\n";
+        << d.normative.min_cluster_elements << " element" << (d.normative.min_cluster_elements == 1 ? "" : "s") << ".";
+    if (!d.normative.chance_clusters.empty()) out << " " << html_escape(d.normative.chance_clusters) << ".";
+    out << "</p>\n";
   }
   if (!d.region_method.empty()) out << "<p class=\"muted\">Regions: " << html_escape(d.region_method) << ".</p>\n";
   out << "</section>\n";

@@ -8,6 +8,7 @@
 // PET (NEUROSTAT/3D-SSP layout), the flat maps, the cluster and regional tables by anatomical
 // name, quality flags and processing parameters. The pipeline fills a ReportData; the pictures
 // come from analysis/report_figures.h. Nothing here reads the clock: same data, same bytes.
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -33,6 +34,10 @@ struct ReportCluster {
   std::string region;            // majority region of its vertices ("" = unnamed)
   double region_fraction = 0.0;  // share of its labelled vertices in `region`
   std::string peak_region;       // region of the peak element
+  // Chance clusters of the controls (analysis/normative.h): how many of `controls` had a cluster
+  // of this sign at least as large, and p = (1 + that) / (1 + controls); -1 / NaN when not measured.
+  int controls_as_large = -1, controls = 0;
+  double p_controls = std::numeric_limits<double>::quiet_NaN();
 };
 
 // A row of the regional table: a lobe (region empty) or a region within it.
@@ -76,6 +81,8 @@ struct ReportNormative {
   std::string age_range;         // e.g. "55-78 years"
   std::string correspondence;    // how patient and controls correspond, e.g. "the same K x K square elements"
   int min_cluster_elements = 1;  // clusters smaller than this are not reported
+  std::string chance_clusters;   // how the clusters' p was measured, or why not ("" = not shown)
+  std::string chance_clusters_short;  // the same in one line (the PDF's)
 };
 
 struct ReportData {

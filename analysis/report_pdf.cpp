@@ -109,7 +109,7 @@ std::vector<std::vector<std::string>> cluster_rows(const ReportData& d) {
     rows.push_back({std::to_string(c.id), c.hemisphere, c.sign == "hypo" ? "hypo" : "hyper",
                     c.region.empty() ? "\u2014" : readable_region(c.region), c.peak_region.empty() ? "\u2014" : readable_region(c.peak_region),
                     std::to_string(c.num_elements), format_fixed(c.area_mm2, 0), format_fixed(c.peak_z, 1, true),
-                    format_fixed(c.mean_z, 1, true)});
+                    format_fixed(c.mean_z, 1, true), c.controls_as_large >= 0 ? format_fixed(c.p_controls, 3) : "\u2014"});
   return rows;
 }
 
@@ -138,8 +138,10 @@ void second_page(Page& p, const ReportData& d, const ReportFigures& f) {
                                                     " elements with |z| \u2265 " + format_fixed(d.normative.threshold, 1) + ".",
                           style(kBody));
   } else {
-    table(p, {"#", "side", "type", "region", "peak region", "elements", "mm\u00b2", "peak z", "mean z"}, cluster_rows(d),
-          {0.04, 0.07, 0.07, 0.23, 0.23, 0.1, 0.08, 0.09, 0.09}, 12);
+    table(p, {"#", "side", "type", "region", "peak region", "elements", "mm\u00b2", "peak z", "mean z", "p"}, cluster_rows(d),
+          {0.04, 0.06, 0.07, 0.2, 0.2, 0.1, 0.08, 0.08, 0.08, 0.09}, 12);
+    if (!d.normative.chance_clusters_short.empty())
+      p.y += p.cv.paragraph(p.left, p.y, p.width, d.normative.chance_clusters_short + ".", style(8.5, false, kGrey));
   }
   if (!d.region_method.empty()) p.y += p.cv.paragraph(p.left, p.y, p.width, "Regions: " + d.region_method + ".", style(8.5, false, kGrey));
   if (!d.regions.empty()) {

@@ -150,6 +150,7 @@ int run_compare(const CompareArgs& a) {
   }
   const auto paths = analysis::write_comparison_outputs(a.prefix, ref, a.reference, patient, a.patient, cmp, vertex_elements);
   for (const auto& n : cmp.notes) info("authalic normative compare: note: " + n);
+  if (!cmp.chance_note.empty()) info("authalic normative compare: note: clusters have no p: " + cmp.chance_note);
   info("authalic normative compare: " + std::to_string(cmp.num_compared) + " elements compared, " + std::to_string(cmp.num_hypo) +
        " hypo and " + std::to_string(cmp.num_hyper) + " hyper at |z| >= " + std::to_string(cmp.threshold) + ", " +
        std::to_string(cmp.clusters.size()) + " cluster(s); wrote " + paths.summary_json);
@@ -168,7 +169,8 @@ const bool registered = register_command({50, [](CLI::App& parent) {
       "Normative reference of equal-area elements from control subjects (per element n, mean, SD by Welford; linear "
       "age model when every control has an age), exact merging of references built separately, and comparison of a "
       "patient: z = (patient - expected) / SD (hypometabolism negative), abnormal at |z| >= threshold, clusters of "
-      "touching abnormal elements.");
+      "touching abnormal elements, each with p against the controls' chance clusters (every control compared with the "
+      "others; the reference keeps each control's element values for it).");
   sub->require_subcommand(1);
 
   auto b = std::make_shared<BuildArgs>();

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <random>
 #include <nlohmann/json.hpp>
 
 #include "analysis/normative.h"
@@ -251,6 +252,154 @@ TEST(Normative, AgeModelEqualsDirectLeastSquaresFit) {
   add_subject(mixed, ageless, "ageless.csv");
   EXPECT_FALSE(mixed.age_model);
   EXPECT_TRUE(mixed.comoment.empty());
+}
+
+// Leaving a control out by undoing its Welford update (for the chance clusters) gives the
+// reference built without it, age model included, and the values travel with the subjects through
+// the file, merges and leave-one-out.
+TEST(Normative, LeavingAControlOutEqualsTheReferenceBuiltWithoutIt) {
+  const auto tables = cohort(12, true);
+  const NormativeReference ref = build_from(tables, 0, 12);
+  ASSERT_EQ(ref.subject_values.size(), 12u);
+  EXPECT_TRUE(std::isnan(ref.subject_values[3][5]));  // subject 3's missing value
+  EXPECT_EQ(ref.subject_values[4][7], tables[4].blocks[0].elements[7].value);
+  EXPECT_EQ(ref.subject_values[4][16 + 2], tables[4].blocks[1].elements[2].value);
+  for (std::size_t s : {std::size_t{0}, std::size_t{3}, std::size_t{11}}) {
+    std::vector<ElementTable> others;
+    for (std::size_t t = 0; t < tables.size(); ++t)
+      if (t != s) others.push_back(tables[t]);
+    const NormativeReference direct = build_from(others, 0, others.size()), loo = leave_one_out(ref, s);
+    ASSERT_EQ(loo.subjects.size(), 11u);
+    EXPECT_TRUE(loo.subject_values.empty());
+    for (int i = 0; i < ref.num_values(); ++i) {
+      EXPECT_EQ(loo.n[i], direct.n[i]) << s << " " << i;
+      EXPECT_NEAR(loo.mean[i], direct.mean[i], 1e-13) << s << " " << i;
+      EXPECT_NEAR(loo.m2[i], direct.m2[i], 1e-12) << s << " " << i;
+      EXPECT_NEAR(loo.age_mean[i], direct.age_mean[i], 1e-11) << s << " " << i;
+      EXPECT_NEAR(loo.age_m2[i], direct.age_m2[i], 1e-8 * direct.age_m2[i]) << s << " " << i;
+      EXPECT_NEAR(loo.comoment[i], direct.comoment[i], 1e-11) << s << " " << i;
+    }
+  }
+  EXPECT_THROW(leave_one_out(ref, 12), std::out_of_range);
+  // File round trip (null for the missing value) and merge (concatenated in subject order).
+  const NormativeReference back = reference_from_json(reference_to_json(ref), "ref.json");
+  ASSERT_EQ(back.subject_values.size(), 12u);
+  EXPECT_TRUE(std::isnan(back.subject_values[3][5]));
+  EXPECT_EQ(back.subject_values[7], ref.subject_values[7]);
+  const NormativeReference merged = merge_references(build_from(tables, 0, 5), build_from(tables, 5, 12));
+  ASSERT_EQ(merged.subject_values.size(), 12u);
+  for (std::size_t s = 0; s < 12; ++s) EXPECT_EQ(merged.subject_values[s][9], ref.subject_values[s][9]);
+  // A reference written before the values were kept reads, merges and compares without them.
+  nlohmann::json old = nlohmann::json::parse(reference_to_json(ref));
+  old.erase("subject_values");
+  const NormativeReference old_ref = reference_from_json(old.dump(), "old.json");
+  EXPECT_TRUE(old_ref.subject_values.empty());
+  NormativeReference fresh = empty_reference_like(tables[0]);
+  ElementTable newcomer = tables[1];
+  newcomer.subject_id = "newcomer";
+  add_subject(fresh, newcomer, "newcomer.csv");
+  ASSERT_EQ(fresh.subject_values.size(), 1u);
+  EXPECT_TRUE(merge_references(old_ref, fresh).subject_values.empty());
+  NormativeReference grown = old_ref;
+  ElementTable extra = tables[0];
+  extra.subject_id = "extra";
+  add_subject(grown, extra, "extra.csv");
+  EXPECT_TRUE(grown.subject_values.empty()) << "values of some subjects only would misalign them";
+  ElementTable patient = tables[2];
+  patient.subject_id = "patient";
+  const Comparison c = compare_to_reference(old_ref, patient);
+  EXPECT_TRUE(c.control_mass_hypo.empty());
+  EXPECT_NE(c.chance_note.find("does not keep its controls' values"), std::string::npos) << c.chance_note;
+  for (const ElementCluster& cl : c.clusters) EXPECT_EQ(cl.controls_as_large, -1);
+  // Values that do not add up to n are a corrupt file.
+  nlohmann::json bad = nlohmann::json::parse(reference_to_json(ref));
+  bad["subject_values"][3][5] = 1.0;
+  try {
+    reference_from_json(bad.dump(), "bad.json");
+    ADD_FAILURE() << "inconsistent subject_values were read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.json: element 5 has 11 controls but 12 values in subject_values"), std::string::npos)
+        << e.what();
+  }
+  bad["subject_values"].erase(0);
+  EXPECT_THROW(reference_from_json(bad.dump(), "bad.json"), InputError);
+}
+
+// A large reference keeps the values of its first kMaxChanceControls subjects only (its size stays
+// bounded), the same whether built at once or merged from pieces, and leaves each of them out.
+TEST(Normative, ALargeReferenceKeepsTheFirstHundredControlsValues) {
+  const auto tables = cohort(130, false);
+  const NormativeReference whole = build_from(tables, 0, 130);
+  ASSERT_EQ(whole.subject_values.size(), kMaxChanceControls);
+  EXPECT_TRUE(whole.keeps_values());
+  EXPECT_EQ(whole.subject_values[99][4], tables[99].blocks[0].elements[4].value);
+  for (std::size_t cut : {std::size_t{40}, std::size_t{100}, std::size_t{120}}) {
+    const NormativeReference merged = merge_references(build_from(tables, 0, cut), build_from(tables, cut, 130));
+    ASSERT_EQ(merged.subject_values.size(), kMaxChanceControls) << cut;
+    for (std::size_t s = 0; s < kMaxChanceControls; ++s) EXPECT_EQ(merged.subject_values[s][7], whole.subject_values[s][7]) << cut;
+  }
+  const NormativeReference back = reference_from_json(reference_to_json(whole), "big.json");
+  EXPECT_EQ(back.subject_values.size(), kMaxChanceControls);
+  EXPECT_EQ(leave_one_out(whole, 99).n[0], 129);
+  EXPECT_THROW(leave_one_out(whole, 100), std::out_of_range);
+  ElementTable patient = tables[0];
+  patient.subject_id = "patient";
+  EXPECT_EQ(compare_to_reference(whole, patient).control_mass_hypo.size(), kMaxChanceControls);
+}
+
+// Chance clusters: 15 controls with independent Gaussian noise per element (SD 0.05) and a patient with a
+// 3 x 3 block 6 SD low. Each control, compared with the other 14, has only small, weak clusters;
+// the block's mass (about 9 x 4) beats every one of them: p = 1 / 16. The patient's chance
+// clusters get p well above 0.05, and every p is the share of the controls' masses at least as large.
+TEST(Normative, APlantedClusterBeatsEveryControlsChanceClusters) {
+  constexpr int kK = 12, kN = kK * kK, kControls = 15;
+  std::mt19937 generator(7);
+  std::normal_distribution<double> gaussian(1.0, 0.05);
+  std::vector<ElementTable> controls;
+  for (int s = 0; s < kControls; ++s) {
+    std::vector<double> v(kN);
+    for (double& x : v) x = gaussian(generator);
+    controls.push_back(make_table(Domain::square(), kK, {"left"}, "c" + std::to_string(s), v));
+  }
+  const NormativeReference ref = build_from(controls, 0, kControls);
+  std::vector<double> p(kN);
+  for (double& x : p) x = gaussian(generator);
+  const std::vector<int> block = {5 * kK + 5, 5 * kK + 6, 5 * kK + 7, 6 * kK + 5, 6 * kK + 6, 6 * kK + 7, 7 * kK + 5, 7 * kK + 6, 7 * kK + 7};
+  for (int i : block) p[static_cast<std::size_t>(i)] = ref.mean[static_cast<std::size_t>(i)] - 6 * ref.sd(i);
+  const Comparison c = compare_to_reference(ref, make_table(Domain::square(), kK, {"left"}, "patient", p));
+  ASSERT_EQ(c.control_mass_hypo.size(), static_cast<std::size_t>(kControls)) << c.chance_note;
+  ASSERT_EQ(c.control_mass_hyper.size(), static_cast<std::size_t>(kControls));
+  const ElementCluster* planted = nullptr;
+  for (const ElementCluster& cl : c.clusters)
+    if (cl.sign < 0 && cl.elements.size() >= 9) planted = &cl;
+  ASSERT_NE(planted, nullptr);
+  EXPECT_GT(planted->mass, 30.0);
+  EXPECT_EQ(planted->controls_as_large, 0);
+  EXPECT_DOUBLE_EQ(planted->p_controls, 1.0 / 16);
+  double largest = 0;
+  for (double m : c.control_mass_hypo) largest = std::max(largest, m);
+  EXPECT_LT(largest, planted->mass / 3) << "independent noise gives only small chance clusters";
+  int chance = 0;
+  for (const ElementCluster& cl : c.clusters) {
+    if (&cl == planted) continue;
+    ++chance;
+    double mass = 0;
+    for (int e : cl.elements) mass += std::abs(c.z[static_cast<std::size_t>(e)]) - 2.0;
+    EXPECT_NEAR(cl.mass, mass, 1e-12);
+    const auto& null = cl.sign < 0 ? c.control_mass_hypo : c.control_mass_hyper;
+    const int as_large = static_cast<int>(std::count_if(null.begin(), null.end(), [&](double m) { return m >= cl.mass; }));
+    EXPECT_EQ(cl.controls_as_large, as_large);
+    EXPECT_DOUBLE_EQ(cl.p_controls, (1.0 + as_large) / 16);
+    EXPECT_GT(cl.p_controls, 0.05) << "a chance cluster of " << cl.elements.size() << " elements, mass " << cl.mass;
+  }
+  EXPECT_GT(chance, 0) << "the patient's own noise should flag a few elements";
+  // Off: nothing measured; too few controls: said so.
+  CompareOptions off;
+  off.chance_clusters = false;
+  EXPECT_TRUE(compare_to_reference(ref, make_table(Domain::square(), kK, {"left"}, "patient", p), off).control_mass_hypo.empty());
+  const Comparison few = compare_to_reference(build_from(controls, 0, 3), make_table(Domain::square(), kK, {"left"}, "patient", p));
+  EXPECT_TRUE(few.control_mass_hypo.empty());
+  EXPECT_NE(few.chance_note.find("the reference has 3 controls; leaving one out needs at least 4"), std::string::npos) << few.chance_note;
 }
 
 TEST(Normative, IncompatibleInputsAreRefusedWithAClearError) {

@@ -92,6 +92,24 @@ TEST(Regions, FindingsSummaryInWords) {
   EXPECT_NE(s.find("Hypermetabolism in right cuneus (1 cluster, 95 mm\u00b2), peak z 2.6 in right cuneus."), std::string::npos) << s;
   const std::string none = an::findings_summary({}, 2.0, 3);
   EXPECT_NE(none.find("No hypometabolism (|z| \u2265 2.0 over at least 3 elements)."), std::string::npos) << none;
+  // With the controls' chance clusters measured: how many clusters beat every control.
+  for (auto& x : f) x.controls = 20;
+  f[0].controls_as_large = 0;
+  f[1].controls_as_large = 4;
+  f[2].controls_as_large = 9;
+  const std::string chance = an::findings_summary(f, 2.0, 3);
+  EXPECT_NE(chance.find("peak z \u22124.9 in left precuneus; against chance clusters in the 20 controls: 1 of the 2 clusters "
+                        "(left precuneus) is larger than in every control (p = 0.048)."),
+            std::string::npos)
+      << chance;
+  EXPECT_NE(chance.find("peak z 2.6 in right cuneus; against chance clusters in the 20 controls: the cluster is not larger "
+                        "than in every control."),
+            std::string::npos)
+      << chance;
+  f[1].controls_as_large = 0;
+  EXPECT_NE(an::findings_summary(f, 2.0, 3).find("2 of the 2 clusters (left precuneus and left posterior cingulate) are larger than in every control (p = 0.048)"), std::string::npos);
+  f[0].controls_as_large = f[1].controls_as_large = 3;
+  EXPECT_NE(an::findings_summary(f, 2.0, 3).find("none of the 2 clusters is larger than in every control."), std::string::npos);
 }
 
 TEST(ReportInputs, SmallClustersAreDroppedAndRenumbered) {

@@ -121,9 +121,27 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   std::ifstream tsv(subject / (stem + "_clusters.tsv"));
   std::string header, first;
   ASSERT_TRUE(std::getline(tsv, header));
-  EXPECT_EQ(header, "cluster\themisphere\tdirection\telements\tarea_mm2\tpeak_z\tmean_z\tpeak_row\tpeak_col\tpeak_x_mm\tpeak_y_mm\tpeak_z_mm");
+  EXPECT_EQ(header, "cluster\themisphere\tdirection\telements\tarea_mm2\tpeak_z\tmean_z\tpeak_row\tpeak_col\tpeak_x_mm\tpeak_y_mm\tpeak_z_mm"
+                    "\tmass\tcontrols_as_large\tp_controls");
   ASSERT_TRUE(std::getline(tsv, first)) << "the sample patient has clusters";
   EXPECT_EQ(first.rfind("1\t", 0), 0u) << first;
+  // The controls' chance clusters (leave-one-out, 20 controls): the planted region, in both
+  // hemispheres, beats every control (p = 1/21); the patient's other clusters do not.
+  std::vector<std::string> significant;
+  int clusters = 0;
+  for (std::string line = first; !line.empty(); line.clear(), std::getline(tsv, line)) {
+    std::vector<std::string> cell;
+    std::stringstream fields(line);
+    for (std::string c; std::getline(fields, c, '\t');) cell.push_back(c);
+    ASSERT_EQ(cell.size(), 15u) << line;
+    ++clusters;
+    const double p = std::stod(cell[14]);
+    EXPECT_NEAR(p, (1.0 + std::stoi(cell[13])) / 21, 1e-5) << line;
+    if (p < 0.05) significant.push_back(cell[1] + " " + cell[2]);
+  }
+  EXPECT_EQ(significant, (std::vector<std::string>{"left hypo", "right hypo"})) << clusters << " clusters";
+  EXPECT_NE(html.str().find("against chance clusters in the 20 controls: 2 of the "), std::string::npos);
+  EXPECT_NE(html.str().find("clusters (left precuneus and right cuneus) are larger than in every control (p = 0.048)"), std::string::npos);
   std::ifstream tsv_sidecar(subject / (stem + "_clusters.json"));
   EXPECT_EQ(nlohmann::json::parse(tsv_sidecar).at("area_mm2").at("Units"), "mm^2");
   std::smatch white;
