@@ -53,8 +53,9 @@
 //    "subjects": [{"id": "...", "age": 61.0 | null, "table": "path"}],
 //    "elements": {"n": [...], "mean": [...], "m2": [...], "age_mean": [...], "age_m2": [...],
 //                 "age_value_comoment": [...], "sd": [...]},
-//    "subject_values": [[...], ...]}   (one array per subject, null where it had no value; absent in
-//                                       files written before 2026-12-07, which compare without p)
+//    "subject_values_encoding": "...", "subject_values": ["<base64>", ...]}
+//   (the first 100 subjects' values, each as base64 of little-endian float64, NaN where it had
+//    none; absent in files written before 2026-12-07, which compare without p)
 // Arrays run over hemisphere blocks in the listed order, then element id (row * cols + col);
 // "sd" is derived (sqrt(m2 / (n - 1))) for readers, and ignored when reading.
 #include <algorithm>

@@ -175,18 +175,21 @@ run group "$AUTHALIC" group "$ROOT/sample_data/cohort.csv" "$WORK/grp" --jobs 2 
 row "group: sample_data, 20 controls + 2 patients" "-" "-" "$(printf %.1f "$WALL")" "$RSS" \
     "$(json "['failed']") failed; reference exit $(json "['reference_exit_code']")"
 VALIDATION=$(AUTHALIC="$AUTHALIC" SAMPLE="$ROOT/sample_data" GRP="$WORK/grp" VAL="$WORK/val" $PY - <<'EOF'
-import csv, json, os, subprocess, numpy as np, nibabel as nib
+import csv, json, os, subprocess, sys, numpy as np, nibabel as nib
 exe, sample, grp, val = (os.environ[k] for k in ("AUTHALIC", "SAMPLE", "GRP", "VAL"))
 os.makedirs(val)
 def sh(*args):
-    return subprocess.run([exe, *args], check=True, capture_output=True, text=True).stdout
+    r = subprocess.run([exe, *args], capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(f"bench_analysis: {' '.join(args[:2])} exited {r.returncode}: {r.stderr.strip()}")
+    return r.stdout
 rows = list(csv.DictReader(open(os.path.join(sample, "cohort.csv"))))
 controls = [r["subject_id"] for r in rows if r["role"] == "control"]
 patients = [r["subject_id"] for r in rows if r["role"] == "patient"]
 table = lambda s: os.path.join(grp, f"sub-{s}", f"sub-{s}_elements.tsv")
 fractions = []
 for s in controls:
-    ref = os.path.join(val, f"loo-{s}.json")
+    ref = os.path.join(val, f"reference-without-{s}.json")
     sh("normative", "build", ref, *[table(c) for c in controls if c != s], "--quiet")
     j = json.loads(sh("normative", "compare", ref, table(s), os.path.join(val, f"loo-{s}"), "--json", "--quiet"))
     fractions.append((j["counts"]["hypo"] + j["counts"]["hyper"]) / j["counts"]["compared"])
@@ -203,12 +206,22 @@ for p in patients:
     z = np.asarray(nib.load(os.path.join(val, f"{p}_z.nii.gz")).dataobj, dtype=float)
     z0 = np.asarray(nib.load(os.path.join(val, f"{p}-norescale_z.nii.gz")).dataobj, dtype=float)
     false0 = 0
+    # Clusters beyond the controls' chance clusters (p_controls < 0.05) and where their elements lie.
+    summary = json.load(open(os.path.join(val, f"{p}.json")))
+    significant = {c["id"] for c in summary["clusters"] if c["p_controls"] is not None and c["p_controls"] < 0.05}
+    sig_elements = {(r["hemisphere"], int(r["row"]), int(r["col"])) for r in csv.DictReader(open(os.path.join(val, f"{p}_abnormal.csv")))
+                    if int(r["cluster"]) in significant}
+    sig_in = sig_partly = sig_out = 0
     for b, (hemi, fs) in enumerate((("L", "lh"), ("R", "rh"))):
         out = os.path.join(val, f"truth-{p}-{fs}")
         sh("elements", os.path.join(sample, "surf", f"{fs}.white"), os.path.join(d, f"sub-{p}_hemi-{hemi}_space-authalic_flat.surf.gii"),
            os.path.join(sample, "truth", f"{fs}.lesion.label.gii"), out, "--k", "32", "--quiet")
-        for e in csv.DictReader(open(out + ".csv")):
+        for e in csv.DictReader(open(out + ".tsv"), delimiter="\t"):
             t, zz = float(e["value"]), z[int(e["col"]), int(e["row"]), b]
+            if (("left", "right")[b], int(e["row"]), int(e["col"])) in sig_elements:
+                if t >= 1 - 1e-9: sig_in += 1
+                elif t <= 1e-12: sig_out += 1
+                else: sig_partly += 1
             if t >= 1 - 1e-9:
                 inside += 1; found += zz <= -2
             elif t <= 1e-12:
@@ -216,6 +229,11 @@ for p in patients:
     print(f"pat|{p} vs 20 controls (-25% region)|{found} of {inside} elements fully inside flagged hypo = {100*found/inside:.1f}% "
           f"(>= 90%); {false} of {outside} elements outside flagged = {100*false/outside:.1f}% (<= 5%); "
           f"{100*false0/outside:.1f}% with --no-rescale")
+    pvals = sorted(c["p_controls"] for c in summary["clusters"] if c["p_controls"] is not None)
+    print(f"chance|{p}: clusters beyond the controls' chance clusters|{len(significant)} of {len(summary['clusters'])} "
+          f"clusters at p_controls < 0.05 (leave-one-out over {summary['chance_clusters'].get('controls', 0)} controls); "
+          f"their elements: {sig_in} fully inside the region, {sig_partly} partly, {sig_out} outside; the other clusters' p: "
+          f"{', '.join(f'{x:.2f}' for x in pvals if x >= 0.05)}")
 EOF
 )
 while IFS='|' read -r _ name note; do row "$name" "-" "-" "-" "-" "$note"; done <<< "$VALIDATION"

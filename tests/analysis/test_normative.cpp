@@ -313,13 +313,20 @@ TEST(Normative, LeavingAControlOutEqualsTheReferenceBuiltWithoutIt) {
   for (const ElementCluster& cl : c.clusters) EXPECT_EQ(cl.controls_as_large, -1);
   // Values that do not add up to n are a corrupt file.
   nlohmann::json bad = nlohmann::json::parse(reference_to_json(ref));
-  bad["subject_values"][3][5] = 1.0;
+  bad["subject_values"][3] = bad["subject_values"][4];  // subject 4 has element 5, subject 3 has not
   try {
     reference_from_json(bad.dump(), "bad.json");
     ADD_FAILURE() << "inconsistent subject_values were read";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("bad.json: element 5 has 11 controls but 12 values in subject_values"), std::string::npos)
         << e.what();
+  }
+  bad["subject_values"][3] = "AAAA";
+  try {
+    reference_from_json(bad.dump(), "bad.json");
+    ADD_FAILURE() << "a short subject_values row was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.json: subject_values[3] is not base64 of 32 float64 values"), std::string::npos) << e.what();
   }
   bad["subject_values"].erase(0);
   EXPECT_THROW(reference_from_json(bad.dump(), "bad.json"), InputError);
