@@ -175,6 +175,13 @@ def normative_validation(name, d):
         print(f"{p} (-25 % region) vs {len(controls)} controls, {name} mode: {found} of {inside} elements fully inside flagged "
               f"hypo = {100 * found / max(inside, 1):.1f} % (>= 90 %: {'PASS' if found >= 0.9 * inside else 'FAIL'}); "
               f"{100 * false / max(outside, 1):.1f} % of the elements outside flagged")
+        # Clusters beyond the controls' chance clusters (analysis/normative.h): p_controls < 0.05.
+        clusters = json.load(open(os.path.join(val, f"{name}-{p}.json")))["clusters"]
+        beyond = [c for c in clusters if c["p_controls"] is not None and c["p_controls"] < 0.05]
+        rest = sorted(c["p_controls"] for c in clusters if c["p_controls"] is not None and c["p_controls"] >= 0.05)
+        print(f"{p}, {name} mode: {len(beyond)} of {len(clusters)} clusters beyond every control's chance clusters ("
+              + ", ".join(f"{c['hemisphere']} {c['sign']} {c['num_elements']} elements, p {c['p_controls']:.3f}" for c in beyond)
+              + f"); the others' p from {rest[0] if rest else float('nan'):.2f}")
 
 
 for name, d in (("atlas", atl), ("registration", reg)):
