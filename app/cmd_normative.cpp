@@ -196,7 +196,10 @@ const bool registered = register_command({50, [](CLI::App& parent) {
   CLI::App* compare = sub->add_subcommand(
       "compare",
       "Compare a patient's element table with a reference. Writes OUT_PREFIX_z.nii.gz, OUT_PREFIX_z.png, "
-      "OUT_PREFIX_abnormal.csv, OUT_PREFIX.json and, with --labels, per-vertex z as OUT_PREFIX[_<hemisphere>]_z.func.gii.");
+      "OUT_PREFIX_abnormal.csv, OUT_PREFIX.json and, with --labels, per-vertex z as OUT_PREFIX[_<hemisphere>]_z.func.gii. "
+      "Each cluster gets p_controls = (1 + controls whose largest cluster of its direction has at least its mass, the sum of "
+      "|z| - threshold) / (1 + controls), every control compared with the others (references built before 2026-12-07 "
+      "keep no control values: no p).");
   compare->add_option("REFERENCE", c->reference, "Normative reference (.json)")->required();
   compare->add_option("PATIENT", c->patient, "Patient's element table (.tsv or .csv with its .json sidecar)")->required();
   compare->add_option("OUT_PREFIX", c->prefix, "Output prefix")->required();

@@ -82,6 +82,24 @@ TEST(NormativeCli, BuildMergeCompare) {
   EXPECT_EQ(j["clusters"][0]["num_elements"], 3);
   EXPECT_DOUBLE_EQ(j["clusters"][0]["area_mm2"].get<double>(), 150.0);
   EXPECT_EQ(j["clusters"][0]["sign"], "hypo");
+  // The merged reference kept its 10 controls' values: every control was compared with the others.
+  EXPECT_EQ(j["chance_clusters"]["measured"], true) << j["chance_clusters"].dump();
+  EXPECT_EQ(j["chance_clusters"]["controls"], 10);
+  const double p = j["clusters"][0]["p_controls"].get<double>();
+  EXPECT_DOUBLE_EQ(p, (1.0 + j["clusters"][0]["controls_as_large"].get<int>()) / 11);
+  // A reference written before the values were kept: compared, without p, and said so.
+  {
+    nlohmann::json old = nlohmann::json::parse(std::ifstream(dir + "/merged.json"));
+    old.erase("subject_values");
+    std::ofstream(dir + "/old.json") << old.dump();
+    std::string said;
+    ASSERT_EQ(test::run_command(exe + " normative compare " + dir + "/old.json " + dir + "/p1_elements.csv " + dir + "/cmp_old", &said), 0)
+        << said;
+    EXPECT_NE(said.find("note: clusters have no p: the reference does not keep its controls' values"), std::string::npos) << said;
+    const auto jo = nlohmann::json::parse(std::ifstream(dir + "/cmp_old.json"));
+    EXPECT_TRUE(jo["clusters"][0]["p_controls"].is_null());
+    EXPECT_EQ(jo["chance_clusters"]["measured"], false);
+  }
   for (const char* suffix : {"_z.nii.gz", "_z.png", "_abnormal.csv", ".json", "_z.func.gii"})
     EXPECT_TRUE(std::filesystem::exists(dir + "/cmp" + suffix)) << suffix;
   const VectorXd zv = io::read_per_vertex(dir + "/cmp_z.func.gii");
