@@ -41,6 +41,7 @@ table { border-collapse: collapse; margin: 6px 0 12px 0; font-size: 14px; }
 th, td { border: 1px solid #c8c8c8; padding: 4px 10px; text-align: left; vertical-align: top; }
 th { background: #f0f0f4; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
+tr.beyond td { font-weight: bold; }
 .figures { display: flex; flex-wrap: wrap; gap: 16px; align-items: flex-start; }
 figure { margin: 0; }
 .viewer canvas { width: 960px; height: 560px; max-width: 100%; border: 1px solid #e0e0e0; }
@@ -188,7 +189,8 @@ void clusters_section(std::ostringstream& out, const ReportData& d) {
            "<th>elements</th><th>area (mm&#178;)</th><th>peak z</th><th>mean z</th><th>peak RAS (mm)</th>"
            "<th>controls with one as large (p)</th></tr>\n";
     for (const auto& c : d.clusters) {
-      out << "<tr><td class=\"num\">" << c.id << "</td><td>" << html_escape(c.hemisphere) << "</td><td>"
+      // Clusters larger than every control's chance clusters stand out.
+      out << (c.controls_as_large == 0 ? "<tr class=\"beyond\">" : "<tr>") << "<td class=\"num\">" << c.id << "</td><td>" << html_escape(c.hemisphere) << "</td><td>"
           << html_escape(c.sign == "hypo" ? "hypometabolism" : c.sign == "hyper" ? "hypermetabolism" : c.sign) << "</td><td>"
           << region_cell(c.region, c.region_fraction) << "</td><td>" << region_cell(c.peak_region, 1.0)
           << "</td><td class=\"num\">" << c.num_elements << "</td><td class=\"num\">" << fixed(c.area_mm2, 0)

@@ -57,9 +57,10 @@ double key_values(Canvas& cv, double x, double y, double w, const KeyValues& row
   return used;
 }
 
-// A simple table: header row in bold, then rows; column widths as fractions of the page width.
+// A simple table: header row in bold, then rows (in bold where `bold_rows` says so); column widths as
+// fractions of the page width.
 void table(Page& p, const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows,
-           const std::vector<double>& widths, std::size_t max_rows) {
+           const std::vector<double>& widths, std::size_t max_rows, const std::vector<bool>& bold_rows = {}) {
   const double pitch = text_line_height(kBody) + 2;
   auto row = [&](const std::vector<std::string>& cells, bool bold) {
     double x = p.left;
@@ -70,7 +71,7 @@ void table(Page& p, const std::vector<std::string>& header, const std::vector<st
     p.y += pitch;
   };
   row(header, true);
-  for (std::size_t r = 0; r < rows.size() && r < max_rows; ++r) row(rows[r], false);
+  for (std::size_t r = 0; r < rows.size() && r < max_rows; ++r) row(rows[r], r < bold_rows.size() && bold_rows[r]);
   if (rows.size() > max_rows)
     row({"... " + std::to_string(rows.size() - max_rows) + " more in the HTML report and sub-<id>_clusters.tsv"}, false);
 }
@@ -113,6 +114,13 @@ std::vector<std::vector<std::string>> cluster_rows(const ReportData& d) {
   return rows;
 }
 
+// Per cluster row: larger than every control's chance clusters (shown in bold).
+std::vector<bool> beyond_chance(const ReportData& d) {
+  std::vector<bool> bold;
+  for (const ReportCluster& c : d.clusters) bold.push_back(c.controls_as_large == 0);
+  return bold;
+}
+
 // Lobes of both hemispheres side by side: lobe, left (n, mean z), right (n, mean z).
 std::vector<std::vector<std::string>> lobe_rows(const ReportData& d) {
   std::vector<std::vector<std::string>> rows;
@@ -139,7 +147,7 @@ void second_page(Page& p, const ReportData& d, const ReportFigures& f) {
                           style(kBody));
   } else {
     table(p, {"#", "side", "type", "region", "peak region", "elements", "mm\u00b2", "peak z", "mean z", "p"}, cluster_rows(d),
-          {0.04, 0.06, 0.07, 0.2, 0.2, 0.1, 0.08, 0.08, 0.08, 0.09}, 12);
+          {0.04, 0.06, 0.07, 0.2, 0.2, 0.1, 0.08, 0.08, 0.08, 0.09}, 12, beyond_chance(d));
     if (!d.normative.chance_clusters_short.empty())
       p.y += p.cv.paragraph(p.left, p.y, p.width, d.normative.chance_clusters_short + ".", style(8.5, false, kGrey));
   }

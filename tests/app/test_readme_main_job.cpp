@@ -152,6 +152,9 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   EXPECT_EQ(significant, (std::vector<std::string>{"left hypo", "right hypo"})) << clusters << " clusters";
   EXPECT_NE(html.str().find("against chance clusters in the 20 controls: 2 of the "), std::string::npos);
   EXPECT_NE(html.str().find("clusters (left precuneus and right cuneus) are larger than in every control (p = 0.048)"), std::string::npos);
+  int bold_rows = 0;
+  for (std::size_t at = page.find("<tr class=\"beyond\">"); at != std::string::npos; at = page.find("<tr class=\"beyond\">", at + 1)) ++bold_rows;
+  EXPECT_EQ(bold_rows, 2) << "the cluster table shows the two clusters beyond chance in bold";
   std::ifstream tsv_sidecar(subject / (stem + "_clusters.json"));
   EXPECT_EQ(nlohmann::json::parse(tsv_sidecar).at("area_mm2").at("Units"), "mm^2");
   std::smatch white;
