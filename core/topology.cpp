@@ -66,34 +66,38 @@ std::pair<std::size_t, std::size_t> range_of(const DirectedEdges& d, int a, int 
 }  // namespace
 
 EdgeTopology edge_topology(const MatrixXi& F, int num_vertices) {
-  // Undirected half-edges (other end, face, corner opposite) bucketed by their smaller end: edges
-  // come out ordered by (smaller end, larger end), each with its faces in order.
-  using HalfEdge = std::array<int, 4>;  // smaller end, larger end, face, corner
+  // Undirected half-edges (larger end, 3f + c: face f, corner c opposite) bucketed by their smaller
+  // end: edges come out ordered by (smaller end, larger end), each with its faces in order. Eight
+  // bytes a half-edge (the smaller end is the bucket): half the memory of carrying both ends, face
+  // and corner (fs741's cortex, 295k faces: 30 -> 20 ms).
+  using HalfEdge = std::pair<int, int>;
   std::vector<HalfEdge> unsorted;
   unsorted.reserve(static_cast<std::size_t>(F.rows()) * 3);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int a = F(f, (c + 1) % 3), b = F(f, (c + 2) % 3);
-      unsorted.push_back({std::min(a, b), std::max(a, b), static_cast<int>(f), c});
-    }
-  const VertexBuckets<HalfEdge> he(num_vertices, std::move(unsorted), [](const HalfEdge& h) { return h[0]; });
+    for (int c = 0; c < 3; ++c)
+      unsorted.emplace_back(std::max(F(f, (c + 1) % 3), F(f, (c + 2) % 3)), static_cast<int>(3 * f + c));
+  const auto smaller_end = [&F](const HalfEdge& h) {
+    const int f = h.second / 3, c = h.second % 3;
+    return std::min(F(f, (c + 1) % 3), F(f, (c + 2) % 3));
+  };
+  const VertexBuckets<HalfEdge> he(num_vertices, std::move(unsorted), smaller_end);
   EdgeTopology t;
   t.FE.resize(F.rows(), 3);
   std::vector<std::pair<int, int>> edges;
   edges.reserve(he.items.size() / 2 + 1);
   t.edge_faces.reserve(he.items.size() / 2 + 1, he.items.size());
-  for (std::size_t i = 0; i < he.items.size();) {
-    std::size_t j = i;
-    const int a = he.items[i][0], b = he.items[i][1];
-    const int e = static_cast<int>(edges.size());
-    edges.emplace_back(a, b);
-    t.edge_faces.begin_edge();
-    for (; j < he.items.size() && he.items[j][0] == a && he.items[j][1] == b; ++j) {
-      t.edge_faces.add_face(he.items[j][2]);
-      t.FE(he.items[j][2], he.items[j][3]) = e;
+  for (int a = 0; a < num_vertices; ++a)
+    for (std::size_t i = static_cast<std::size_t>(he.start[a]), end = static_cast<std::size_t>(he.start[a + 1]); i < end;) {
+      const int b = he.items[i].first;
+      const int e = static_cast<int>(edges.size());
+      edges.emplace_back(a, b);
+      t.edge_faces.begin_edge();
+      for (; i < end && he.items[i].first == b; ++i) {
+        const int id = he.items[i].second;
+        t.edge_faces.add_face(id / 3);
+        t.FE(id / 3, id % 3) = e;
+      }
     }
-    i = j;
-  }
   t.E.resize(static_cast<Eigen::Index>(edges.size()), 2);
   for (std::size_t e = 0; e < edges.size(); ++e) {
     t.E(static_cast<Eigen::Index>(e), 0) = edges[e].first;
