@@ -499,7 +499,7 @@ ElementTable read_element_table(const std::string& csv_path, bool values_only) {
         for (const auto& [key, value] : j["metadata"].items())
           t.metadata[key] = value.is_string() ? value.get<std::string>() : value.dump();
     } catch (const nlohmann::json::exception& e) {
-      throw InputError(sidecar + ": invalid element-table sidecar (" + std::string(e.what()) + ")");
+      throw InputError(sidecar + ": invalid element-table sidecar (" + short_json_error(e.what()) + ")");
     }
     if (t.blocks.empty()) throw InputError(sidecar + ": lists no hemisphere");
   }

@@ -220,33 +220,18 @@ void add_subject(NormativeReference& r, const ElementTable& table, const std::st
   if (keep_values) r.subject_values.push_back(std::move(values));
 }
 
-NormativeReference leave_one_out(const NormativeReference& reference, std::size_t s) {
-  if (s >= reference.subjects.size() || s >= reference.subject_values.size())
-    throw std::out_of_range("leave_one_out: the reference has no values of subject " + std::to_string(s));
-  // Every field but the kept values (up to 100 subjects' worth: copying them for each of 100
-  // leave-one-out references was most of a comparison's time).
-  NormativeReference r;
-  r.grid = reference.grid;
-  r.hemispheres = reference.hemispheres;
-  r.normalisation = reference.normalisation;
-  r.units = reference.units;
-  r.software = reference.software;
-  r.correspondence = reference.correspondence;
-  r.subjects = reference.subjects;
-  r.age_model = reference.age_model;
-  r.partial = reference.partial;
-  r.n = reference.n;
-  r.mean = reference.mean;
-  r.m2 = reference.m2;
-  r.age_mean = reference.age_mean;
-  r.age_m2 = reference.age_m2;
-  r.comoment = reference.comoment;
-  const std::vector<double>& y = reference.subject_values[s];
-  const double a = reference.subjects[s].age;
+namespace {
+// `stats` without subject s, whose values are y: add_subject's Welford step undone. Its kept values
+// are dropped (a leave-one-out reference needs none), so a caller making many passes a copy of its
+// reference without them.
+NormativeReference without_subject(const NormativeReference& stats, const std::vector<double>& y, std::size_t s) {
+  NormativeReference r = stats;
+  r.subject_values.clear();
+  const double a = stats.subjects[s].age;
   for (std::size_t i = 0; i < y.size(); ++i) {
     if (!std::isfinite(y[i])) continue;
-    // add_subject's Welford step undone: mean' = mean - (y - mean) / (n - 1), M2' = M2 - (y - mean')
-    // (y - mean), and with the age C' = C - (a - mean_a') (y - mean), age M2' likewise.
+    // mean' = mean - (y - mean) / (n - 1), M2' = M2 - (y - mean') (y - mean), and with the age
+    // C' = C - (a - mean_a') (y - mean), age M2' likewise.
     const double n1 = r.n[i] - 1;
     if (n1 <= 0) {
       r.n[i] = r.mean[i] = r.m2[i] = 0;
@@ -266,6 +251,13 @@ NormativeReference leave_one_out(const NormativeReference& reference, std::size_
   }
   r.subjects.erase(r.subjects.begin() + static_cast<std::ptrdiff_t>(s));
   return r;
+}
+}  // namespace
+
+NormativeReference leave_one_out(const NormativeReference& reference, std::size_t s) {
+  if (s >= reference.subjects.size() || s >= reference.subject_values.size())
+    throw std::out_of_range("leave_one_out: the reference has no values of subject " + std::to_string(s));
+  return without_subject(reference, reference.subject_values[s], s);
 }
 
 NormativeReference merge_references(const NormativeReference& a, const NormativeReference& b, const std::string& a_name,
@@ -455,7 +447,8 @@ NormativeReference reference_from_json(const std::string& text, const std::strin
                          ", m2 " + std::to_string(r.m2[i]) + "); the file is corrupt");
     if (j.contains("subject_values")) r.subject_values = read_subject_values(j["subject_values"], r, path);
   } catch (const nlohmann::json::exception& ex) {
-    throw InputError(path + ": invalid normative reference (" + std::string(ex.what()) + ")");
+    throw InputError(path + ": invalid normative reference (" + short_json_error(ex.what()) +
+                     "); the file is truncated or not a reference written by authalic");
   }
   return r;
 }
@@ -715,6 +708,8 @@ void measure_chance_clusters(const NormativeReference& ref, const ElementTable& 
     return;
   }
   const int ne = ref.grid.num_elements();
+  NormativeReference stats = ref;  // copied once without the values, not once per control
+  stats.subject_values.clear();
   // One slot per control, filled in parallel: the result does not depend on the thread count.
   out.control_mass_hypo.assign(controls, 0.0);
   out.control_mass_hyper.assign(controls, 0.0);
@@ -733,7 +728,7 @@ void measure_chance_clusters(const NormativeReference& ref, const ElementTable& 
         for (int e = 0; e < ne; ++e)
           control.blocks[b].elements[static_cast<std::size_t>(e)].value =
               ref.subject_values[s][b * static_cast<std::size_t>(ne) + static_cast<std::size_t>(e)];
-      for (const ElementCluster& c : compare_elements(leave_one_out(ref, s), control, each).clusters) {
+      for (const ElementCluster& c : compare_elements(without_subject(stats, ref.subject_values[s], s), control, each).clusters) {
         double& l = c.sign < 0 ? out.control_mass_hypo[s] : out.control_mass_hyper[s];
         l = std::max(l, c.mass);
       }

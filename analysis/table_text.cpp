@@ -35,6 +35,12 @@ bool read_text_file(const std::string& path, std::string& text) {
   return true;
 }
 
+std::string short_json_error(const std::string& what) {
+  std::string s = what.substr(0, what.find("; last read:"));
+  if (s.size() > 300) s = s.substr(0, 297) + "...";
+  return s;
+}
+
 CsvCursor::CsvCursor(std::string_view text, std::string path, char delimiter)
     : text_(text), path_(std::move(path)), delimiter_(delimiter) {
   if (text_.substr(0, 3) == "\xEF\xBB\xBF") next_ = 3;  // UTF-8 byte-order mark (spreadsheets)

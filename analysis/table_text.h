@@ -12,6 +12,10 @@ namespace authalic::analysis {
 void append_number(std::string& out, double x);
 // Whole file into `text`; false when it cannot be opened or read.
 bool read_text_file(const std::string& path, std::string& text);
+// A JSON library error for a one-line message: its "; last read: '...'" tail dropped (in a
+// truncated file it quotes the whole unfinished token, kilobytes of a reference's base64) and the
+// rest cut at 300 characters.
+std::string short_json_error(const std::string& what);
 
 // Reads a delimited table (comma-separated by default, tab-separated with delimiter '\t') with a
 // header line, field by field. Errors throw InputError "<path>:<line>: <problem>".

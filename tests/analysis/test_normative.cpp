@@ -330,6 +330,17 @@ TEST(Normative, LeavingAControlOutEqualsTheReferenceBuiltWithoutIt) {
   }
   bad["subject_values"].erase(0);
   EXPECT_THROW(reference_from_json(bad.dump(), "bad.json"), InputError);
+  // A file cut inside a value string: one short line, not the unfinished base64 quoted back.
+  const std::string text = reference_to_json(ref);
+  try {
+    reference_from_json(text.substr(0, text.find("subject_values\": [") + 40), "cut.json");
+    ADD_FAILURE() << "a truncated reference was read";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("cut.json: invalid normative reference ("), std::string::npos) << what;
+    EXPECT_NE(what.find("the file is truncated or not a reference written by authalic"), std::string::npos) << what;
+    EXPECT_LT(what.size(), 400u) << what;
+  }
 }
 
 // A large reference keeps the values of its first kMaxChanceControls subjects only (its size stays
