@@ -47,7 +47,9 @@ Atlas load_atlas(const AtlasFiles& files, const ProgressFn& progress) {
   CortexRegion region = read_cortex_region(white.mesh, files.white, files.cortex, "atlas");
   A.note = region.note;
   try {
-    A.square = atlas_square_map(white.mesh.V, sphere.mesh.V, region.F, SquareMapOptions{}, progress);
+    SquareMapOptions options;
+    options.surface_faces = &white.mesh.F;
+    A.square = atlas_square_map(white.mesh.V, sphere.mesh.V, region.F, options, progress);
   } catch (const InputError& e) {
     throw InputError(files.white + " (atlas, " + files.cortex + "): " + e.what());
   }

@@ -97,6 +97,15 @@ EdgeTopology edge_topology(const MatrixXi& F, int num_vertices);
 // on the boundary or at a non-manifold edge.
 VectorXi halfedge_twins(const MatrixXi& F, int num_vertices);
 
+// How the faces of `region` wind relative to the outside of `surface`, the closed surface they were
+// cut from (a hemisphere and its cortex label): +1 counter-clockwise seen from outside, -1 seen
+// from inside, 0 when it cannot tell: `surface` is not closed and consistently oriented (every
+// half-edge with exactly one opposite twin) or encloses no volume, or no edge of `region` is one
+// of its edges. The outside is where the enclosed volume Σ a·(b×c)/6 is positive; the region's
+// winding is that of the majority of its half-edges found in `surface`. Unlike a cone from a
+// centre, right for any region, also one facing the centre (the insula, a sulcal bank).
+int region_winding_on_closed_surface(const MatrixXd& V, const MatrixXi& region, const MatrixXi& surface);
+
 // Boundary loops as ordered vertex lists, each oriented consistently with the faces (interior on the
 // left), longest first. Requires an edge-manifold mesh.
 std::vector<std::vector<int>> boundary_loops(const MatrixXi& F, int num_vertices);

@@ -39,14 +39,17 @@ std::string region_geometry_problem(const MatrixXd& V, const MatrixXi& F) {
   return {};
 }
 
-bool orient_outward(const MatrixXd& V, MatrixXi& F) {
-  // Σ (c_f − C)·(e1 x e2)/2 is the signed volume (x3) of the cone from C over the region:
-  // positive when the faces point away from the hemisphere's centre.
-  const Eigen::Vector3d C = V.colwise().mean().transpose();
-  double vol = 0;
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Eigen::Vector3d a = V.row(F(f, 0)).transpose(), b = V.row(F(f, 1)).transpose(), c = V.row(F(f, 2)).transpose();
-    vol += ((a + b + c) / 3.0 - C).dot((b - a).cross(c - a));
+bool orient_outward(const MatrixXd& V, MatrixXi& F, const MatrixXi* surface) {
+  const int winding = surface ? region_winding_on_closed_surface(V, F, *surface) : 0;
+  // Without it: Σ (c_f − C)·(e1 x e2)/2 is the signed volume (x3) of the cone from C over the
+  // region, positive when the faces point away from the hemisphere's centre.
+  double vol = winding;
+  if (winding == 0) {
+    const Eigen::Vector3d C = V.colwise().mean().transpose();
+    for (Eigen::Index f = 0; f < F.rows(); ++f) {
+      const Eigen::Vector3d a = V.row(F(f, 0)).transpose(), b = V.row(F(f, 1)).transpose(), c = V.row(F(f, 2)).transpose();
+      vol += ((a + b + c) / 3.0 - C).dot((b - a).cross(c - a));
+    }
   }
   if (!(vol < 0)) return false;
   F.col(1).swap(F.col(2));
@@ -181,7 +184,7 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   R.num_input_vertices = static_cast<int>(V.rows());
   MatrixXi F = F_in;
 
-  if (opt.orient_outward) R.faces_reversed = orient_outward(V, F);
+  if (opt.orient_outward) R.faces_reversed = orient_outward(V, F, opt.surface_faces);
   RectangleBoundaryMap b;
   b.width = opt.width;
   b.sliding_boundary = opt.sliding_initial_boundary;

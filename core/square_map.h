@@ -7,10 +7,13 @@
 //
 // Anatomical orientation rule (so homologous anatomy lands in the same part of the square across
 // subjects; coordinates are RAS, i.e. +y anterior, as FreeSurfer and GIFTI surfaces are):
-//  1. Faces are oriented outward (counter-clockwise seen from outside the hemisphere; tested by
-//     the sign of Σ (c_f − C)·n_f area_f over the region, C the centroid of all of V; reversed
-//     if negative). The map preserves orientation, so the lateral surface faces the viewer of
-//     the square (x to the right, y up), as if looking at the hemisphere from outside.
+//  1. Faces are oriented outward (counter-clockwise seen from outside the hemisphere). When the
+//     closed surface the region was cut from is given (SquareMapOptions::surface_faces), its
+//     enclosed volume says which side is out (region_winding_on_closed_surface); otherwise the
+//     sign of Σ (c_f − C)·n_f area_f over the region, C the centroid of all of V, which is right
+//     for a whole hemisphere's cortex but not for a small region facing C (the insula). Faces
+//     pointing in are reversed. The map preserves orientation, so the lateral surface faces the
+//     viewer of the square (x to the right, y up), as if looking at the hemisphere from outside.
 //  2. The point of the region's boundary nearest to the most anterior region vertex (largest y,
 //     the frontal pole) goes to the middle of the top side, (W/2, 1); the rest of the boundary
 //     follows by arc length, counter-clockwise.
@@ -37,6 +40,10 @@ struct SquareMapOptions {
   VectorXd density;          // optional per-vertex density (#V of the input, > 0), DLF 5.5
   bool anatomical_anchor = true;  // rule 2 above; false: the boundary starts at its first vertex at (0, 0)
   bool orient_outward = true;     // rule 1 above
+  // Optional: the faces (on V) of the whole surface the region was cut from, e.g. the closed
+  // hemisphere of a cortex label; when it is closed, rule 1 takes the outside from it. Not owned:
+  // it must outlive the square_map call.
+  const MatrixXi* surface_faces = nullptr;
   bool sliding_initial_boundary = false;  // see RectangleBoundaryMap::sliding_boundary
   // Stretch-energy iterations between the conformal map and the flow (core/stretch_energy.h):
   // a roughly authalic start, so the flow only corrects what is left.
@@ -99,9 +106,11 @@ struct SquareMapResult {
 // beyond 1e6 mm, or degenerate (zero-area) triangles.
 std::string region_geometry_problem(const MatrixXd& V, const MatrixXi& F);
 
-// Rule 1: reverses every face of F when the region's faces point into the hemisphere (the
-// signed volume of the cone from the centroid of V over F is negative); returns whether it did.
-bool orient_outward(const MatrixXd& V, MatrixXi& F);
+// Rule 1: reverses every face of F when the region's faces point into the hemisphere: they wind
+// inward on `surface` (the closed surface F was cut from, region_winding_on_closed_surface), or,
+// when that cannot tell (no surface given, or not closed), the signed volume of the cone from the
+// centroid of V over F is negative. Returns whether it reversed them.
+bool orient_outward(const MatrixXd& V, MatrixXi& F, const MatrixXi* surface = nullptr);
 // Rule 2, the hemisphere anchor written once: the point of the boundary of F nearest to the most
 // anterior vertex of F (largest y; ties: lowest index) is placed at the middle of the top side of
 // boundary.width's rectangle (sets boundary's anchor point and position). Returns that vertex.

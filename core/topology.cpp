@@ -119,6 +119,42 @@ VectorXi halfedge_twins(const MatrixXi& F, int num_vertices) {
   return twin;
 }
 
+int region_winding_on_closed_surface(const MatrixXd& V, const MatrixXi& region, const MatrixXi& surface) {
+  const int n = static_cast<int>(V.rows());
+  if (surface.rows() == 0 || region.rows() == 0 || surface.minCoeff() < 0 || surface.maxCoeff() >= n || region.minCoeff() < 0 ||
+      region.maxCoeff() >= n)
+    return 0;
+  const DirectedEdges d(surface, n);
+  double volume = 0;  // x6
+  for (Eigen::Index f = 0; f < surface.rows(); ++f) {
+    for (int c = 0; c < 3; ++c) {
+      const int a = surface(f, c), b = surface(f, (c + 1) % 3);
+      const auto [lo, hi] = range_of(d, a, b);
+      const auto [tlo, thi] = range_of(d, b, a);
+      if (hi - lo != 1 || thi - tlo != 1) return 0;  // a boundary, non-manifold or inconsistently oriented edge
+    }
+    const Eigen::Vector3d a = V.row(surface(f, 0)).transpose(), b = V.row(surface(f, 1)).transpose(), c = V.row(surface(f, 2)).transpose();
+    volume += a.dot(b.cross(c));
+  }
+  if (!(std::abs(volume) > 0)) return 0;
+  // A region face (a, b, c) winds as the surface's face through a -> b when that face's third
+  // corner is c, the other way when the face through b -> a has it.
+  auto third_corner = [&](int a, int b) {
+    const auto [lo, hi] = range_of(d, a, b);
+    if (hi == lo) return -1;
+    const int id = d.id(lo);
+    return surface(id / 3, (id % 3 + 2) % 3);
+  };
+  long same = 0, opposite = 0;
+  for (Eigen::Index f = 0; f < region.rows(); ++f) {
+    const int a = region(f, 0), b = region(f, 1), c = region(f, 2);
+    same += third_corner(a, b) == c;
+    opposite += third_corner(b, a) == c;
+  }
+  if (same == opposite) return 0;
+  return (same > opposite) == (volume > 0) ? 1 : -1;
+}
+
 std::vector<std::vector<int>> vertex_neighbours(const MatrixXi& F, Eigen::Index num_vertices) {
   std::vector<std::vector<int>> adj(static_cast<std::size_t>(num_vertices));
   for (Eigen::Index f = 0; f < F.rows(); ++f)

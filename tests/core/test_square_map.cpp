@@ -142,6 +142,59 @@ TEST(SquareMap, RightHemisphereIsTheMirrorImageOfTheLeft) {
   EXPECT_GT(l.UV(l.anterior_vertex, 1), 0.9);
 }
 
+// Rule 1 on a region that faces the surface's centre (as the insula faces a hemisphere's): the
+// cone from the centroid calls it inward, the closed surface it was cut from says it is outward.
+// A torus: its inner-side faces point at the axis, where its centroid is.
+TEST(SquareMap, OutwardIsTakenFromTheClosedSurfaceTheRegionIsCutFrom) {
+  const TriMesh torus = test::torus_mesh(24);  // vertex i n + j at angles u = 2π i/n, v = 2π j/n
+  const int n = 24;
+  const VectorXd volume_terms = [&] {
+    VectorXd t(torus.F.rows());
+    for (Eigen::Index f = 0; f < torus.F.rows(); ++f)
+      t[f] = torus.V.row(torus.F(f, 0)).dot(Eigen::RowVector3d(torus.V.row(torus.F(f, 1))).cross(Eigen::RowVector3d(torus.V.row(torus.F(f, 2)))));
+    return t;
+  }();
+  MatrixXi surface = torus.F;
+  if (volume_terms.sum() < 0) surface.col(1).swap(surface.col(2));  // wound outward
+  std::vector<int> inner;  // a disk on the inner side: u in [0, 60°], v in [150°, 210°]
+  for (Eigen::Index f = 0; f < surface.rows(); ++f) {
+    bool in = true;
+    for (int c = 0; c < 3; ++c) {
+      const int i = surface(f, c) / n, j = surface(f, c) % n;
+      in = in && i <= n / 6 && j >= 5 * n / 12 && j <= 7 * n / 12;
+    }
+    if (in) inner.push_back(static_cast<int>(f));
+  }
+  ASSERT_GT(inner.size(), 20u);
+  MatrixXi region(static_cast<Eigen::Index>(inner.size()), 3);
+  for (std::size_t k = 0; k < inner.size(); ++k) region.row(static_cast<Eigen::Index>(k)) = surface.row(inner[k]);
+
+  EXPECT_EQ(region_winding_on_closed_surface(torus.V, region, surface), 1);
+  MatrixXi by_cone = region;
+  EXPECT_TRUE(orient_outward(torus.V, by_cone));  // the centroid's rule gets it wrong
+  MatrixXi by_surface = region;
+  EXPECT_FALSE(orient_outward(torus.V, by_surface, &surface));
+  MatrixXi reversed = region;
+  reversed.col(1).swap(reversed.col(2));
+  EXPECT_EQ(region_winding_on_closed_surface(torus.V, reversed, surface), -1);
+  EXPECT_TRUE(orient_outward(torus.V, reversed, &surface));
+  EXPECT_EQ(reversed, region);
+  // A surface wound inward says the same about the same faces.
+  MatrixXi inward = surface;
+  inward.col(1).swap(inward.col(2));
+  EXPECT_EQ(region_winding_on_closed_surface(torus.V, region, inward), 1);
+  // An open surface cannot tell: the cone's rule decides.
+  const MatrixXi open = region;
+  EXPECT_EQ(region_winding_on_closed_surface(torus.V, region, open), 0);
+
+  // Through square_map: with the surface the map keeps the region's (outward) winding.
+  SquareMapOptions o = test_options();
+  o.surface_faces = &surface;
+  const SquareMapResult r = square_map(torus.V, region, o);
+  EXPECT_FALSE(r.faces_reversed);
+  EXPECT_EQ(r.flips, 0);
+}
+
 TEST(SquareMap, SameBitsForOneAndTwoThreads) {
   const TriMesh m = curved_cap();
   const int saved = omp_get_max_threads();
