@@ -99,6 +99,9 @@ int run_elements(const ElementsArgs& a) {
   if (const auto seam = map.metadata.find(analysis::kSeamKey); domain.kind == DomainKind::Rectangle && seam != map.metadata.end())
     domain.seam_x = analysis::parse_seam(seam->second, a.map);
   const analysis::ElementGrid grid = analysis::element_grid(domain, a.k);
+  io::require_vertex_numbering(surface, a.surface, a.values);
+  io::require_vertex_numbering(surface, a.surface, a.map);
+  io::require_vertex_numbering(map, a.map, a.surface);
   const VectorXd values = io::read_per_vertex(a.values, surface.mesh.num_vertices());
   const auto meta = func_metadata(a.values);
 

@@ -84,6 +84,11 @@ MatrixXi region_faces(const FlattenArgs& a, const io::Surface& surface, std::str
     if (c->F.rows() == 0)
       throw InputError(a.label + ": the label's " + std::to_string(verts.size()) +
                        " vertices contain no whole triangle of the surface; check that the label belongs to " + a.surface);
+    if (!c->is_disk()) {
+      // A damaged surface shows in the region as holes and loops: say what is wrong with it instead.
+      const std::string damage = surface_problem_for_regions(analyze_topology(mesh.V, mesh.F));
+      if (!damage.empty()) throw InputError(a.surface + ": " + damage);
+    }
     if (!c->is_disk())
       throw InputError(a.label + " on " + a.surface + ": " + c->problem() +
                        "; the square map needs one disk: check that the label is this surface's cortex with the medial "
@@ -440,9 +445,12 @@ void run(const FlattenArgs& a) {
                        {a.out, a.uv, a.initial, a.fs_patch, a.metrics, a.png, a.histogram});
   const io::Surface surface = io::read_surface(a.surface);
   const TriMesh& mesh = surface.mesh;
+  for (const std::string& per_vertex : {a.faces_from, a.label, a.patch, a.density, a.shading})
+    io::require_vertex_numbering(surface, a.surface, per_vertex);
   const FlattenRegion region = read_region(a, surface);
   check_region_size(a, region.F);
   SquareMapOptions options = square_map_options(a, mesh);
+  options.surface_faces = &mesh.F;  // the outside of a closed surface orients any region on it
   // A label's cleanup has measured the region's topology: the map need not measure it again.
   if (region.cleanup) options.region_topology = region.cleanup->topology;
 
@@ -472,13 +480,20 @@ void run(const FlattenArgs& a) {
   const std::string problem = authalic_acceptance_problem(
       accept_metrics, plain ? accept_metrics.vertex_ln_area.mean : r.flow.final_vertex_mean, plain);
   const std::string failure = a.surface + " (" + region.source + "): the map is not authalic: " + problem;
+  // A region of fewer triangles than the acceptance grid's elements (one triangle, one vertex
+  // ring) cannot be spread evenly over the square, however long the flow runs: the input is what
+  // to change.
+  const Eigen::Index acceptance_elements = 32 * 32;
+  const std::string advice =
+      r.F.rows() < acceptance_elements
+          ? "The region has only " + std::to_string(r.F.rows()) + " triangles, fewer than the 32 x 32 elements of the acceptance grid: "
+            "give a larger region or a finer mesh; "
+      : a.method == "mesh" ? std::string(a.no_polish ? "Drop --no-polish (the per-face polish finishes the mesh flow) or use "
+                                                       "the default --method grid; "
+                                                     : "Try the default --method grid; ")
+                           : std::string("Try more passes (--passes 6) or a finer grid (--grid 1024); ");
   if (!problem.empty() && !a.keep_failed)
-    throw ProcessingError(failure + "; nothing was written. " +
-                          (a.method == "mesh" ? std::string(a.no_polish ? "Drop --no-polish (the per-face polish finishes the mesh flow) or use "
-                                                                          "the default --method grid; "
-                                                                        : "Try the default --method grid; ")
-                                              : std::string("Try more passes (--passes 6) or a finer grid (--grid 1024); ")) +
-                          "--keep-failed writes the map for inspection, marked as failed");
+    throw ProcessingError(failure + "; nothing was written. " + advice + "--keep-failed writes the map for inspection, marked as failed");
 
   // Outputs: flat surface in mm (area = cortical area), uv in [0, 1]^2, FreeSurfer patch; the
   // initial map's metrics (for --metrics) are measured meanwhile.

@@ -58,6 +58,8 @@ void check_map_shape(const std::string& path, const MatrixXd& U, const MatrixXi&
 void run(const MetricsArgs& a) {
   const io::Surface surface = io::read_surface(a.surface);
   const io::Surface map = io::read_surface(a.map);
+  io::require_vertex_numbering(surface, a.surface, a.map);  // the map pairs with the surface by vertex
+  io::require_vertex_numbering(map, a.map, a.surface);
   const int nv = surface.mesh.num_vertices();
   const Domain domain = Domain::of(parse_domain_kind(a.domain, "--domain"));
   if (map.mesh.num_vertices() < nv)

@@ -135,6 +135,7 @@ analysis::Normalisation sample_normalisation(const SampleArgs& a, const io::Volu
   norm.description = "none: values in the PET's units";
   if (a.normalize == "global") {
     std::vector<bool> in_cortex(static_cast<std::size_t>(surface.mesh.num_vertices()), false);
+    io::require_vertex_numbering(surface, a.surface, a.cortex);
     for (int v : io::read_region_vertices(a.cortex, surface.mesh)) in_cortex[static_cast<std::size_t>(v)] = true;
     const Submesh cortex = submesh_from_vertices(TriMesh{V_world, surface.mesh.F}, in_cortex);
     if (cortex.mesh.F.rows() == 0)

@@ -239,7 +239,7 @@ void measure_unfilled_holes(const Surface& s, const std::vector<char>& mask, con
     }
   if (largest >= 0) {
     r.largest_unfilled_hole_mm2 = c.groups[largest].area;
-    r.largest_unfilled_hole_fraction = r.area_mm2 > 0 ? c.groups[largest].area / r.area_mm2 : 0;
+    r.largest_unfilled_hole_fraction = r.fill_rule_area_mm2 > 0 ? c.groups[largest].area / r.fill_rule_area_mm2 : 0;
     std::vector<char> hole(static_cast<std::size_t>(s.nf), 0);
     for (int f = 0; f < s.nf; ++f) hole[f] = c.comp[f] == largest;
     const std::vector<char> hole_used = used_vertices(s, hole);
@@ -289,6 +289,7 @@ RegionCleanup region_faces_from_vertices(const MatrixXd& V, const MatrixXi& F, c
   double region_area = 0;
   for (int f = 0; f < s.nf; ++f)
     if (mask[f]) region_area += s.A[f];
+  r.fill_rule_area_mm2 = region_area;
 
   // 3. Fill the enclosed holes below the size limit.
   if (kept >= 0) {
@@ -369,6 +370,20 @@ RegionCleanup region_faces_from_vertices(const MatrixXd& V, const MatrixXi& F, c
   return r;
 }
 
+std::string surface_problem_for_regions(const TopologyReport& t) {
+  std::vector<std::string> damage;
+  if (t.non_manifold_edges > 0)
+    damage.push_back(plural(t.non_manifold_edges, "edge is", "edges are") + " shared by more than two triangles (non-manifold)");
+  if (t.inconsistent_orientation_edges > 0)
+    damage.push_back(plural(t.inconsistent_orientation_edges, "edge is", "edges are") +
+                     " traversed the same way by both its triangles (inconsistent orientation)");
+  if (t.duplicate_faces > 0) damage.push_back(plural(t.duplicate_faces, "triangle is", "triangles are") + " repeated");
+  if (damage.empty()) return {};
+  std::string s = "the surface is not a clean triangle mesh: ";
+  for (std::size_t i = 0; i < damage.size(); ++i) s += (i ? "; " : "") + damage[i];
+  return s + "; repair it (orient its faces consistently, remove repeated and dangling triangles) before cutting a region from it";
+}
+
 std::string RegionCleanup::summary() const {
   std::vector<std::string> parts;
   if (holes_filled > 0)
@@ -397,7 +412,7 @@ std::string RegionCleanup::problem() const {
   s << "the region is not one disk after cleanup (" << topology.summary() << ")";
   if (holes_unfilled > 0) {
     char buf[200];
-    std::snprintf(buf, sizeof(buf), "%.1f mm^2 (%.2f %% of the region, %d vertices", largest_unfilled_hole_mm2,
+    std::snprintf(buf, sizeof(buf), "%.1f mm^2 (%.2f %% of the region before filling, %d vertices", largest_unfilled_hole_mm2,
                   100.0 * largest_unfilled_hole_fraction, largest_unfilled_hole_vertices);
     s << "; " << plural(holes_unfilled, "hole was", "holes were") << " too large to fill, the largest " << buf
       << "; holes below " << 100.0 * max_hole_fraction << " % of the region are filled)";

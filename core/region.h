@@ -79,7 +79,10 @@ struct RegionCleanup {
   int holes_unfilled = 0;
   double largest_unfilled_hole_mm2 = 0;
   int largest_unfilled_hole_vertices = 0;  // its vertices not on the region
-  double largest_unfilled_hole_fraction = 0;  // of area_mm2
+  // Of the area the filling rule compares holes with (the kept piece before filling), so a hole
+  // reported too large is at least max_hole_fraction of it.
+  double largest_unfilled_hole_fraction = 0;
+  double fill_rule_area_mm2 = 0;
 
   bool is_disk() const { return F.rows() > 0 && topology.is_disk() && topology.is_oriented(); }
   bool changed() const { return islands_dropped + holes_filled + pinch_faces_removed > 0; }
@@ -88,12 +91,17 @@ struct RegionCleanup {
   std::string summary() const;
   // Empty when is_disk(); otherwise why not, for an InputError message: "the region is not one disk
   // after cleanup (<topology summary>); 1 hole was too large to fill, the largest 336.2 mm^2
-  // (1.38 % of the region, 17 vertices; holes below 1 % of the region are filled)", then
+  // (1.38 % of the region before filling, 17 vertices; holes below 1 % of the region are filled)", then
   // "; cleanup: <summary()>" when something was changed.
   std::string problem() const;
 };
 
 RegionCleanup region_faces_from_vertices(const MatrixXd& V, const MatrixXi& F, const std::vector<bool>& in_region,
                                          const RegionCleanupOptions& opt = {});
+
+// Empty when a region can be cut from the surface (V, F) by its vertices: every edge in at most two
+// triangles, the triangles consistently oriented and none repeated. Otherwise what is wrong, for
+// an InputError: the cleanup would report the damage as holes and boundary loops of the region.
+std::string surface_problem_for_regions(const TopologyReport& surface);
 
 }  // namespace authalic

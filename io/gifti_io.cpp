@@ -342,18 +342,22 @@ GiftiContents read_gifti(const std::string& path) {
       }
     validate_mesh(out.mesh, path, "GIFTI");
     copy_meta(p->meta, &out.metadata);
-    if (p->numCS > 0 && p->coordsys && p->coordsys[0]) {
-      const giiCoordSystem* cs = p->coordsys[0];
-      out.dataspace = cs->dataspace ? cs->dataspace : "";
+    // The pointset's dataspace is its first coordinate system's. Among its transforms, the one to
+    // scanner space (as FreeSurfer's mris_convert writes for tkregister surfaces, possibly after
+    // another, e.g. to Talairach) tells where the coordinates are in the scanner.
+    if (p->numCS > 0 && p->coordsys && p->coordsys[0] && p->coordsys[0]->dataspace) out.dataspace = p->coordsys[0]->dataspace;
+    for (int k = 0; k < p->numCS && p->coordsys; ++k) {
+      const giiCoordSystem* cs = p->coordsys[k];
+      if (!cs) continue;
+      const std::string dataspace = cs->dataspace ? cs->dataspace : "";
       const std::string xformspace = cs->xformspace ? cs->xformspace : "";
-      // A transform to scanner space (as FreeSurfer's mris_convert writes for tkregister
-      // surfaces) tells where the coordinates are in the scanner.
-      if (xformspace == "NIFTI_XFORM_SCANNER_ANAT" && out.dataspace != xformspace) {
-        Eigen::Matrix4d m;
-        for (int r = 0; r < 4; ++r)
-          for (int c = 0; c < 4; ++c) m(r, c) = cs->xform[r][c];
-        if (m.allFinite() && m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) && std::abs(m.block<3, 3>(0, 0).determinant()) > 1e-12)
-          out.to_scanner = m;
+      if (xformspace != "NIFTI_XFORM_SCANNER_ANAT" || dataspace == xformspace || dataspace != out.dataspace) continue;
+      Eigen::Matrix4d m;
+      for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) m(r, c) = cs->xform[r][c];
+      if (m.allFinite() && m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)) && std::abs(m.block<3, 3>(0, 0).determinant()) > 1e-12) {
+        out.to_scanner = m;
+        break;
       }
     }
   }

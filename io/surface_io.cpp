@@ -4,9 +4,11 @@
 #include "io/surface_io.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <set>
 #include <sstream>
 
 #include "io/atomic_file.h"
@@ -269,6 +271,19 @@ TriMesh patch_mesh(const TriMesh& parent, const Patch& patch) {
   return out;
 }
 
+void require_vertex_numbering(const Surface& surface, const std::string& surface_path, const std::string& per_vertex_path) {
+  if (surface.format != "stl" || per_vertex_path.empty()) return;
+  throw InputError(per_vertex_path + ": cannot pair with " + surface_path +
+                   ": an STL file has no vertex numbering (its triangles' corners are welded by position, numbered as first "
+                   "met); give the surface in the format the per-vertex file was made for (GIFTI, FreeSurfer, VTK, PLY or OBJ)");
+}
+
+std::map<std::string, std::string> read_per_vertex_metadata(const std::string& path) {
+  const std::string bytes = detail::read_file(path);
+  if (!detail::is_gzip(bytes) && !detail::looks_like_gifti(bytes)) return {};
+  return detail::read_gifti(path).metadata;
+}
+
 MatrixXd read_per_vertex_columns(const std::string& path, std::vector<std::string>* names, int expected_vertices) {
   const std::string bytes = detail::read_file(path);
   MatrixXd values;
@@ -386,12 +401,27 @@ void check_label_follows_surface(const std::string& path, const Label& label, co
   fail(path, problem.str(), "it belongs to another mesh (another subject, hemisphere or resolution); use the label made for this surface");
 }
 
+// A label-table name for what is not cortex: the medial wall (HCP's "Medial_Wall", "medialwall"),
+// FreeSurfer's "unknown" and "corpuscallosum", Workbench's "???": the keys a cortex label file
+// may give its medial wall instead of 0.
+bool names_the_medial_wall(const std::string& name) {
+  std::string k;
+  for (const char c : name)
+    if (std::isalnum(static_cast<unsigned char>(c))) k += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return k.empty() || k == "medialwall" || k == "unknown" || k == "corpuscallosum";
+}
+
+[[noreturn]] void fail_empty_region(const std::string& path) {
+  fail(path, "region is empty (no vertex selected)", "check that this is the right label or mask");
+}
+
 // The vertices of a region file's contents (bytes, read from path).
 std::vector<int> region_vertices(const std::string& bytes, const std::string& path, int expected_vertices, const TriMesh* surface) {
   std::vector<int> vertices;
   if (detail::looks_like_freesurfer_label(bytes) || (!bytes.empty() && bytes[0] == '#' && ends_with(detail::lower_filename(path), ".label"))) {
     const Label label = detail::parse_freesurfer_label(bytes, path);
     vertices = label.vertices;
+    if (vertices.empty()) fail_empty_region(path);  // before the checks below, which need points
     if (expected_vertices >= 0) {
       for (const int v : vertices)
         if (v >= expected_vertices)
@@ -401,6 +431,7 @@ std::vector<int> region_vertices(const std::string& bytes, const std::string& pa
     }
   } else {
     bool labels = false;
+    std::set<int> outside_keys{0};  // label files: the keys that are not cortex
     MatrixXd values;
     if (detail::is_gzip(bytes) || detail::looks_like_gifti(bytes)) {
       detail::GiftiContents g = detail::read_gifti(path);
@@ -408,6 +439,8 @@ std::vector<int> region_vertices(const std::string& bytes, const std::string& pa
       labels = g.columns_are_labels;
       values = g.columns.col(0);
       check_length(path, values.rows(), expected_vertices);
+      for (const auto& [key, name] : g.label_table)
+        if (names_the_medial_wall(name)) outside_keys.insert(key);
     } else {
       values = read_per_vertex(path, expected_vertices);
     }
@@ -421,11 +454,11 @@ std::vector<int> region_vertices(const std::string& bytes, const std::string& pa
              "give the cortex as a FreeSurfer .label, a .label.gii or a 0/1 .shape.gii mask");
     }
     for (Eigen::Index i = 0; i < values.rows(); ++i)
-      if (labels ? values(i, 0) != 0.0 : values(i, 0) > 0.5) vertices.push_back(static_cast<int>(i));
+      if (labels ? outside_keys.count(static_cast<int>(values(i, 0))) == 0 : values(i, 0) > 0.5) vertices.push_back(static_cast<int>(i));
   }
   std::sort(vertices.begin(), vertices.end());
   vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
-  if (vertices.empty()) fail(path, "region is empty (no vertex selected)", "check that this is the right label or mask");
+  if (vertices.empty()) fail_empty_region(path);
   return vertices;
 }
 

@@ -57,6 +57,11 @@ struct SurfaceWriteOptions {
 // anything else, e.g. lh.white). Atomic: a temporary file in the same folder, then rename.
 void write_surface(const std::string& path, const TriMesh& mesh, const SurfaceWriteOptions& options = {});
 
+// Per-vertex files (labels, masks, densities, a map's vertices) pair with a surface by its vertex
+// numbering, which an STL file does not have: its triangles' corners are welded by position and
+// numbered as first met. An InputError naming both files when `surface` was read from STL.
+void require_vertex_numbering(const Surface& surface, const std::string& surface_path, const std::string& per_vertex_path);
+
 // Write options for a surface on the same coordinates as `s` (e.g. its subdivision): its space
 // (GIFTI dataspace and scanner transform, or FreeSurfer's volume-geometry footer), its structure
 // and geometric type, and its other metadata. A GIFTI transform that is a translation (as
@@ -88,6 +93,10 @@ VectorXd read_per_vertex(const std::string& path, int expected_vertices = -1, in
 MatrixXd read_per_vertex_columns(const std::string& path, std::vector<std::string>* names = nullptr,
                                  int expected_vertices = -1);
 
+// The metadata a GIFTI per-vertex file carries (file level: AnatomicalStructurePrimary and what
+// its writer recorded, e.g. the element grid of an element label file); empty for other formats.
+std::map<std::string, std::string> read_per_vertex_metadata(const std::string& path);
+
 struct FuncWriteOptions {
   std::vector<std::string> column_names;
   std::string anatomical_structure;
@@ -102,7 +111,8 @@ void write_label_gifti(const std::string& path, const VectorXi& labels, const st
                        const FuncWriteOptions& options = {});
 
 // A cortex region given as vertices: FreeSurfer label file (lh.cortex.label), a GIFTI label
-// file (non-zero keys) or a GIFTI shape/func mask (values > 0.5). Indices are 0-based.
+// file (its non-zero keys, except those its label table names as the medial wall: "Medial_Wall",
+// "???", "unknown", "corpuscallosum") or a GIFTI shape/func mask (values > 0.5). Indices are 0-based.
 std::vector<int> read_region_vertices(const std::string& path, int expected_vertices = -1);
 // The same, checked against the surface it is for: the vertex count, and a FreeSurfer label's
 // coordinates must follow the surface's triangles. The label stores each vertex's position on

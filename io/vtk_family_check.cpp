@@ -798,6 +798,24 @@ void check_obj(const std::string& bytes, const std::string& path) {
   }
 }
 
+std::string obj_geometry_only(const std::string& bytes) {
+  std::string out;
+  out.reserve(bytes.size() / 2);
+  Lines lines(bytes);
+  std::string_view line;
+  while (lines.next(line)) {
+    const std::vector<std::string_view> w = split_words(strip_obj_comment(line));
+    if (w.empty() || (w[0] != "v" && w[0] != "f")) continue;
+    out += w[0];
+    for (std::size_t k = 1; k < w.size(); ++k) {
+      out += ' ';
+      out += w[0] == "f" ? w[k].substr(0, w[k].find('/')) : w[k];  // a corner's vertex index only
+    }
+    out += '\n';
+  }
+  return out;
+}
+
 namespace {
 
 // The value of attribute `name` in an XML start tag, or false when absent; the value must be

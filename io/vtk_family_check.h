@@ -28,6 +28,11 @@ std::string quoted(std::string_view tok);
 void check_ply(const std::string& bytes, const std::string& path);
 // OBJ: every v/vt/vn line holds finite numbers, every f/l/p index points at a declared vertex.
 void check_obj(const std::string& bytes, const std::string& path);
+// A checked OBJ's geometry only: its v lines and its f lines with each corner's vertex index
+// (texture and normal indices, vt/vn lines and everything else dropped). vtkOBJReader gives a
+// face corner with its own normal or texture coordinate a point of its own: an OBJ with one
+// normal per face came out as a triangle soup, its vertex numbering lost.
+std::string obj_geometry_only(const std::string& bytes);
 // STL: binary files are exactly 84 + 50 n bytes; ASCII vertex lines hold three finite numbers.
 void check_stl(const std::string& bytes, const std::string& path);
 // VTK XML PolyData: the Piece counts are bounded (and fit the file when not compressed), arrays

@@ -207,8 +207,11 @@ TriMesh read_vtk_family(const std::string& path, const std::string& format) {
     return run_reader<vtkPLYReader>(path, path, "PLY");
   }
   if (format == "obj") {
-    check_obj(read_file(path), path);
-    return run_reader<vtkOBJReader>(path, path, "OBJ");
+    const std::string bytes = read_file(path);
+    check_obj(bytes, path);
+    const TempFile copy(".obj");
+    copy.write(obj_geometry_only(bytes));
+    return run_reader<vtkOBJReader>(copy.path(), path, "OBJ");
   }
   if (format == "stl") {
     check_stl(read_file(path), path);

@@ -11,7 +11,9 @@
 
 #include "common/region_labels.h"
 #include "common/test_data.h"
+#include "core/mesh.h"
 #include "core/region.h"
+#include "core/square_map.h"
 #include "io/surface_io.h"
 
 namespace {
@@ -257,4 +259,85 @@ TEST(RegionCli, FlattenRefusesTheLabelOfAnotherMesh) {
   // The native label passes the same check (the map itself is tested elsewhere).
   EXPECT_EQ(io::read_region_vertices(native_label, io::read_surface(native).mesh).size(),
             io::read_freesurfer_label(native_label).vertices.size());
+}
+
+// A region facing the hemisphere's centre (30 rings about vertex 94315 of the native white
+// surface, on the insula: 4,795 vertices) keeps its outward winding: the map is not the mirror
+// image the centroid's cone rule made of it (it reversed the faces, and the lateral side faced
+// away from the viewer). The closed hemisphere it is cut from tells which side is out.
+TEST(RegionCli, ARegionFacingTheHemispheresCentreIsNotMirrored) {
+  AUTHALIC_REQUIRE_SHARED(native, "fs741/lh.white.surf.gii");
+  const TriMesh white = io::read_surface(native).mesh;
+  std::vector<char> in(static_cast<std::size_t>(white.num_vertices()), 0);
+  in[94315] = 1;
+  grow_by_rings(in, vertex_neighbours(white.F, white.num_vertices()), 30);
+  io::Label l;
+  for (int v = 0; v < white.num_vertices(); ++v)
+    if (in[static_cast<std::size_t>(v)]) l.vertices.push_back(v);
+  l.positions.resize(static_cast<Eigen::Index>(l.vertices.size()), 3);
+  for (std::size_t i = 0; i < l.vertices.size(); ++i) l.positions.row(static_cast<Eigen::Index>(i)) = white.V.row(l.vertices[i]);
+  l.values = VectorXd::Zero(static_cast<Eigen::Index>(l.vertices.size()));
+  const std::string dir = test::temp_dir("region_cli_insula");
+  io::write_freesurfer_label(dir + "/insula.label", l);
+  MatrixXi region(0, 3);  // the label's whole faces, in the surface's (outward) winding
+  for (Eigen::Index f = 0; f < white.F.rows(); ++f)
+    if (in[white.F(f, 0)] && in[white.F(f, 1)] && in[white.F(f, 2)]) {
+      region.conservativeResize(region.rows() + 1, 3);
+      region.row(region.rows() - 1) = white.F.row(f);
+    }
+  MatrixXi by_cone = region;
+  ASSERT_TRUE(orient_outward(white.V, by_cone)) << "the region no longer faces the centroid: pick another";
+
+  std::string out;
+  ASSERT_EQ(run_command(authalic_binary() + " flatten " + native + " " + dir + "/flat.surf.gii --uv " + dir + "/uv.surf.gii --label " +
+                            dir + "/insula.label --metrics " + dir + "/m.json -q",
+                        &out),
+            0)
+      << out;
+  std::ifstream metrics(dir + "/m.json");
+  const nlohmann::json m = nlohmann::json::parse(metrics);
+  EXPECT_FALSE(m.at("faces_reversed_to_point_outward").get<bool>());
+  // The surface's own faces keep their counter-clockwise winding in the map (the few the map
+  // re-triangulated, dividing edges flipped, are not among the map's faces).
+  const TriMesh uv = io::read_surface(dir + "/uv.surf.gii").mesh;
+  const VectorXd area = signed_face_areas_2d(uv.V.leftCols(2), region);
+  EXPECT_GT((area.array() > 0).count(), 0.99 * static_cast<double>(region.rows()));
+}
+
+// A region too small to be spread evenly over the square (one vertex ring: 6 triangles) fails its
+// acceptance (exit 3) with advice about the region, not "try more passes"; a label on a surface
+// with inconsistently oriented faces is bad input (exit 2) naming the surface's damage (it was
+// reported as the region's holes and boundary loops).
+TEST(RegionCli, ATooSmallRegionOrADamagedSurfaceIsNamed) {
+  const std::string dir = test::temp_dir("region_cli_bad_input");
+  test::DefectLabel cap = test::cap_label();
+  const std::vector<bool> whole = cap.in;
+  const int centre = test::nearest_vertex(cap.mesh, {0.0, 0.0, 1.0});
+  cap.in.assign(cap.in.size(), false);
+  cap.in[centre] = true;
+  const auto ring = vertex_neighbours(cap.mesh.F, cap.mesh.num_vertices());
+  for (const int w : ring[static_cast<std::size_t>(centre)]) cap.in[static_cast<std::size_t>(w)] = true;
+  write_inputs(cap, dir);
+  std::string out;
+  EXPECT_EQ(run_command(authalic_binary() + " flatten " + dir + "/lh.white.surf.gii " + dir + "/flat.surf.gii --label " + dir +
+                            "/lh.cortex.label -q",
+                        &out),
+            3)
+      << out;
+  EXPECT_NE(out.find("The region has only "), std::string::npos) << out;
+  EXPECT_NE(out.find(" triangles, fewer than the 32 x 32 elements of the acceptance grid: give a larger region"), std::string::npos) << out;
+  EXPECT_EQ(out.find("Try more passes"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/flat.surf.gii"));
+
+  cap.in = whole;
+  for (int f = 0; f < cap.mesh.num_faces(); f += 97) cap.mesh.F.row(f) = Eigen::RowVector3i(cap.mesh.F(f, 0), cap.mesh.F(f, 2), cap.mesh.F(f, 1));
+  write_inputs(cap, dir);
+  EXPECT_EQ(run_command(authalic_binary() + " flatten " + dir + "/lh.white.surf.gii " + dir + "/flat.surf.gii --label " + dir +
+                            "/lh.cortex.label -q",
+                        &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("lh.white.surf.gii: the surface is not a clean triangle mesh:"), std::string::npos) << out;
+  EXPECT_NE(out.find("(inconsistent orientation)"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/flat.surf.gii"));
 }

@@ -127,7 +127,9 @@ TEST(RegionCleanup, AHoleAboveTheLimitIsLeftAndItsSizeReported) {
   EXPECT_EQ(r.holes_filled, 0);
   EXPECT_EQ(r.holes_unfilled, 1);
   EXPECT_NEAR(r.largest_unfilled_hole_mm2, hole, 1e-9);
-  EXPECT_NEAR(r.largest_unfilled_hole_fraction, hole / r.area_mm2, 1e-12);
+  EXPECT_NEAR(r.fill_rule_area_mm2, r.area_mm2, 1e-9);  // nothing was filled or dropped here
+  EXPECT_NEAR(r.largest_unfilled_hole_fraction, hole / r.fill_rule_area_mm2, 1e-12);
+  EXPECT_GE(r.largest_unfilled_hole_fraction, RegionCleanupOptions{}.max_hole_fraction);  // as the rule judged it
   EXPECT_EQ(r.largest_unfilled_hole_vertices, static_cast<int>(d.big_hole.size()));
   char size[64];
   std::snprintf(size, sizeof(size), "%.1f mm^2 (%.2f %% of the region", hole, 100 * hole / r.area_mm2);

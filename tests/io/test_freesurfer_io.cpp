@@ -176,6 +176,17 @@ TEST(FreeSurferLabel, RoundTripAndRegion) {
   EXPECT_EQ(nib_vertices, (std::vector<double>{4, 0, 2}));
 }
 
+// A label with no vertex is refused as an empty region, also where the checks against the
+// surface run (they once averaged its zero positions: a crash, exit 139, in run, sample and flatten).
+TEST(FreeSurferLabel, AnEmptyLabelIsAnEmptyRegion) {
+  const std::string dir = temp_dir("fs_label_empty");
+  write_bytes(dir + "/empty.label", "#!ascii label  , from subject vox2ras=TkReg\n0\n");
+  const TriMesh grid = test::square_grid(4);
+  expect_input_error([&] { read_region_vertices(dir + "/empty.label", 25); }, dir + "/empty.label", "region is empty");
+  expect_input_error([&] { read_region_vertices(dir + "/empty.label", grid); }, dir + "/empty.label", "region is empty");
+  expect_input_error([&] { read_region_file(dir + "/empty.label", grid); }, dir + "/empty.label", "region is empty");
+}
+
 // A label stores positions on the surface it was drawn on. One of this mesh (drawn on its white
 // surface, or on a sphere with the same triangles) is read; one of another mesh whose indices
 // happen to be in range (here: the same points under another vertex numbering) is refused.

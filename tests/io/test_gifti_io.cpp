@@ -48,6 +48,30 @@ TEST(Gifti, VolumeGeometryBecomesScannerTransform) {
   EXPECT_TRUE(s.has_volume_geometry);
 }
 
+// A pointset may list several coordinate systems (GIFTI 1.0 allows any number): the one to
+// scanner space is used wherever it is listed, as nibabel does (only the first was read, so a
+// tkregister surface whose first transform went to Talairach was sampled c_ras off).
+TEST(Gifti, TheScannerTransformIsFoundAmongSeveral) {
+  const std::string dir = temp_dir("gifti_two_cs");
+  SurfaceWriteOptions opt;
+  opt.volume_geometry.valid = true;
+  opt.volume_geometry.cras = {1.5, -2.5, 30};
+  write_surface(dir + "/one.surf.gii", octahedron(), opt);
+  std::string xml = read_bytes(dir + "/one.surf.gii");
+  const std::size_t at = xml.find("<CoordinateSystemTransformMatrix>");
+  ASSERT_NE(at, std::string::npos);
+  const std::string talairach =
+      "<CoordinateSystemTransformMatrix><DataSpace><![CDATA[NIFTI_XFORM_UNKNOWN]]></DataSpace>"
+      "<TransformedSpace><![CDATA[NIFTI_XFORM_TALAIRACH]]></TransformedSpace>"
+      "<MatrixData>1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1</MatrixData></CoordinateSystemTransformMatrix>\n";
+  xml.insert(at, talairach);
+  write_bytes(dir + "/two.surf.gii", xml);
+  const Surface s = read_surface(dir + "/two.surf.gii");
+  const Eigen::Vector3d t = s.to_scanner.block<3, 1>(0, 3);
+  EXPECT_TRUE(t.isApprox(Eigen::Vector3d(1.5, -2.5, 30))) << s.to_scanner;
+  EXPECT_TRUE(s.has_volume_geometry);
+}
+
 TEST(Gifti, FuncColumnsAndLabels) {
   const std::string dir = temp_dir("gifti_func");
   MatrixXd values(6, 2);
@@ -70,6 +94,14 @@ TEST(Gifti, FuncColumnsAndLabels) {
   labels << 0, 3, 3, 0, 7, 0;
   write_label_gifti(dir + "/r.label.gii", labels, {{0, "unknown"}, {3, "cortex"}, {7, "insula"}});
   EXPECT_EQ(read_region_vertices(dir + "/r.label.gii", 6), (std::vector<int>{1, 2, 4}));
+  // A medial wall with a key of its own, named as HCP, FreeSurfer's aparc or Workbench name it,
+  // is not cortex (it was counted in, and the region was the whole closed surface).
+  for (const std::string wall : {"Medial_Wall", "???", "unknown", "corpuscallosum"}) {
+    VectorXi keyed(6);
+    keyed << 1, 2, 2, 1, -1, 2;
+    write_label_gifti(dir + "/mw.label.gii", keyed, {{-1, "???"}, {1, wall}, {2, "Cortex"}});
+    EXPECT_EQ(read_region_vertices(dir + "/mw.label.gii", 6), (std::vector<int>{1, 2, 5})) << wall;
+  }
 }
 
 // Issue 15 item 16: a cortex region file is told apart by content. A face set saved under a name

@@ -51,6 +51,46 @@ TEST(VtkFamily, PolygonsAreFanTriangulated) {
   EXPECT_EQ(s.mesh.F.row(4), Eigen::RowVector3i(1, 6, 2));
 }
 
+// An OBJ whose corners carry their own normals and texture coordinates (one normal per face, as
+// exporters write flat-shaded meshes) keeps the numbering of its v lines: vtkOBJReader alone
+// gave every such corner a point of its own, a triangle soup (fsaverage5: 61,440 points).
+TEST(VtkFamily, ObjCornersWithOwnNormalsKeepTheVertexNumbering) {
+  const std::string dir = temp_dir("vtk_obj_normals");
+  const TriMesh m = octahedron();
+  std::string obj = "# octahedron, one normal and texture coordinate per face corner\n";
+  for (int v = 0; v < 6; ++v)
+    obj += "v " + std::to_string(m.V(v, 0)) + " " + std::to_string(m.V(v, 1)) + " " + std::to_string(m.V(v, 2)) + "\n";
+  for (int f = 0; f < 8; ++f) obj += "vn 0 0 1\nvt 0." + std::to_string(f) + " 0.5\n";
+  for (int f = 0; f < 8; ++f) {
+    obj += "f";
+    for (int c = 0; c < 3; ++c) obj += " " + std::to_string(m.F(f, c) + 1) + "/" + std::to_string(f + 1) + "/" + std::to_string(f + 1);
+    obj += "\n";
+  }
+  write_bytes(dir + "/facets.obj", obj);
+  const Surface s = read_surface(dir + "/facets.obj");
+  ASSERT_EQ(s.mesh.num_vertices(), 6);
+  EXPECT_TRUE(s.mesh.V.isApprox(m.V, 1e-6));
+  EXPECT_EQ(s.mesh.F, m.F);
+  // Relative (negative) vertex indices and v//vn corners too.
+  std::string relative = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf -3//1 -2//1 -1//1\nv 1 1 0\nf 2//1 4//1 3//1\n";
+  write_bytes(dir + "/relative.obj", relative);
+  const Surface r = read_surface(dir + "/relative.obj");
+  ASSERT_EQ(r.mesh.num_vertices(), 4);
+  EXPECT_EQ(r.mesh.F.row(0), Eigen::RowVector3i(0, 1, 2));
+  EXPECT_EQ(r.mesh.F.row(1), Eigen::RowVector3i(1, 3, 2));
+}
+
+// STL has no vertex numbering: a label, mask or map made for the mesh cannot pair with it.
+TEST(VtkFamily, StlSurfacesRefusePerVertexFiles) {
+  const std::string dir = temp_dir("vtk_stl_numbering");
+  write_surface(dir + "/mesh.stl", octahedron());
+  write_surface(dir + "/mesh.ply", octahedron());
+  expect_input_error([&] { require_vertex_numbering(read_surface(dir + "/mesh.stl"), dir + "/mesh.stl", dir + "/cortex.label"); },
+                     dir + "/cortex.label", "an STL file has no vertex numbering");
+  EXPECT_NO_THROW(require_vertex_numbering(read_surface(dir + "/mesh.ply"), dir + "/mesh.ply", dir + "/cortex.label"));
+  EXPECT_NO_THROW(require_vertex_numbering(read_surface(dir + "/mesh.stl"), dir + "/mesh.stl", ""));  // no such file given
+}
+
 TEST(VtkFamily, MergeCoincidentVertices) {
   TriMesh soup;
   soup.V.resize(6, 3);
