@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -459,7 +460,10 @@ void write_reference(const std::string& path, const NormativeReference& referenc
 
 NormativeReference read_reference(const std::string& path) {
   std::string text;
-  if (!read_text_file(path, text)) throw InputError(path + ": cannot read the normative reference");
+  if (!read_text_file(path, text))
+    throw InputError(path + ": cannot read the normative reference (" +
+                     (std::filesystem::exists(path) ? std::string("not a readable file") : std::string("no such file")) +
+                     "); give the reference JSON written by `authalic normative build` or `group`");
   return reference_from_json(text, path);
 }
 
@@ -584,9 +588,12 @@ Comparison compare_elements(const NormativeReference& ref, const ElementTable& p
   out.threshold = options.threshold;
   out.predictive = options.predictive;
   out.patient_age = std::isfinite(options.age) ? options.age : patient.age;
-  out.age_adjusted = options.use_age && ref.age_model && std::isfinite(out.patient_age);
-  if (options.use_age && ref.age_model && !std::isfinite(out.patient_age))
+  const bool age_model = has_age_model(ref);
+  out.age_adjusted = options.use_age && age_model && std::isfinite(out.patient_age);
+  if (options.use_age && age_model && !std::isfinite(out.patient_age))
     out.notes.push_back("the reference has an age model but the patient's age is unknown: z-scores are not age-adjusted");
+  if (ref.age_model && !age_model)
+    out.notes.push_back("the reference's controls are all of one age: no age model, z-scores are not age-adjusted");
   for (const auto& s : ref.subjects)
     if (!patient.subject_id.empty() && s.id == patient.subject_id)
       out.notes.push_back("subject '" + s.id + "' is one of the reference's controls: its z-scores are biased toward 0");
@@ -934,6 +941,10 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
   io::write_file_atomically(p.abnormal_csv, csv);
   io::write_file_atomically(p.summary_json, comparison_summary_json(ref, reference_path, patient, patient_path, cmp, p));
   return p;
+}
+
+bool has_age_model(const NormativeReference& ref) {
+  return ref.age_model && std::any_of(ref.age_m2.begin(), ref.age_m2.end(), [](double m2) { return m2 > 0; });
 }
 
 }  // namespace authalic::analysis

@@ -111,6 +111,10 @@ struct NormativeReference {
   double sd(int i) const;
 };
 
+// Whether z can be age adjusted against `ref`: every control had an age (age_model) and the ages
+// differ (a slope needs a spread; controls all of one age give age_m2 = 0 and no model).
+bool has_age_model(const NormativeReference& ref);
+
 // An empty reference shaped like `table` (grid, hemispheres, normalisation, units).
 NormativeReference empty_reference_like(const ElementTable& table);
 // Throws InputError("<what>: <which property> differs: ... ; <hint>") when the table cannot be

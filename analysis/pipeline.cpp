@@ -70,6 +70,10 @@ class StepLog {
   }
   // A remark about the current step, printed under its timing line.
   void note(const std::string& line) { notes_.push_back(line); }
+  // The run's warnings not logged yet, as notes of this step.
+  void note_new_warnings(const std::vector<std::string>& warnings) {
+    for (; warnings_logged_ < warnings.size(); ++warnings_logged_) note("warning: " + warnings[warnings_logged_]);
+  }
   // A step timed elsewhere (one of two run side by side): its line and its remark.
   void timed(const std::string& name, double seconds, const std::string& remark, RunSummary& summary) {
     note(remark);
@@ -96,6 +100,7 @@ class StepLog {
   std::string name_;
   std::chrono::steady_clock::time_point start_;
   std::vector<std::string> lines_, notes_;
+  std::size_t warnings_logged_ = 0;
 };
 
 struct Hemisphere {
@@ -112,6 +117,9 @@ struct Hemisphere {
   MapMetrics metrics;
   // PET
   SamplingResult sampling;
+  // Of the cortex's vertices (the pial surface's medial wall left out): how many, how many outside
+  // the PET's field of view, how many without a finite value (outside, or NaN voxels).
+  int cortex_vertices = 0, cortex_outside = 0, cortex_no_value = 0;
   VectorXd pet;                 // per surface vertex (normalised)
   ElementResult elements;
   Parcellation regions;         // anatomical names for the report
@@ -161,6 +169,7 @@ std::string load_hemisphere(Hemisphere& h, const std::string& white, const std::
   if (h.pial.mesh.num_vertices() != n)
     throw InputError(pial + ": has " + std::to_string(h.pial.mesh.num_vertices()) + " vertices but " + white + " has " +
                      std::to_string(n) + "; white and pial must come from the same subject and hemisphere");
+  io::require_vertex_numbering(h.white, white, cortex);
   CortexRegion region = read_cortex_region(h.white.mesh, white, cortex, h.name);
   h.cortex_faces = std::move(region.F);
   h.cortex_topology = region.topology;
@@ -207,9 +216,11 @@ SubjectInputs inputs_from_subjects_dir(const std::string& subjects_dir, const st
   in.rh_cortex = need("label/rh.cortex.label");
   for (auto [hemi, reg] : {std::pair<const char*, std::string*>{"lh", &in.lh_sphere_reg}, {"rh", &in.rh_sphere_reg}})
     if (fs::exists(base / "surf" / (std::string(hemi) + ".sphere.reg"))) *reg = (base / "surf" / (std::string(hemi) + ".sphere.reg")).string();
-  // BIDS labels are alphanumeric: FreeSurfer subject names often are not (bert_01).
+  // BIDS labels are alphanumeric: FreeSurfer subject names often are not (bert_01). A name that
+  // already is a BIDS subject ("sub-01") gives its label, not "sub01" (folder sub-sub01).
+  const std::string name = subject.rfind("sub-", 0) == 0 ? subject.substr(4) : subject;
   std::string id;
-  for (char c : subject)
+  for (char c : name)
     if (std::isalnum(static_cast<unsigned char>(c))) id += c;
   in.id = id;
   default_annotations(in);  // label/?h.aparc.annot when recon-all made it
@@ -228,6 +239,7 @@ std::string map_hemisphere(Hemisphere& h, const ProgressFn& progress) {
   SquareMapOptions options;
   options.region_name = h.name + " hemisphere cortex";
   options.region_topology = h.cortex_topology;
+  options.surface_faces = &h.white.mesh.F;
   if (!h.atlas) {
     h.map = square_map(h.white.mesh.V, h.cortex_faces, options, progress);
     return "per-subject correspondence";
@@ -481,8 +493,9 @@ KeyValues quality_rows(const Hemisphere (&hemis)[2], const RunOptions& options, 
   }
   for (const Hemisphere& h : hemis) {
     char buf[160];
-    std::snprintf(buf, sizeof(buf), "%.1f %% of the cortex's vertices outside the PET's field of view%s",
-                  100.0 * h.sampling.outside_fraction, h.sampling.outside_fraction > 0.01 ? " (check the scan's coverage)" : "");
+    const double outside = static_cast<double>(h.cortex_outside) / std::max(1, h.cortex_vertices);
+    std::snprintf(buf, sizeof(buf), "%.1f %% of the cortex's vertices outside the PET's field of view, %d without a value%s",
+                  100.0 * outside, h.cortex_no_value, h.cortex_no_value > 0 ? " (check the scan's coverage)" : "");
     q.emplace_back(h.name + " PET coverage", buf);
   }
   q.emplace_back("registration", registration.empty() ? "none: the PET was taken as registered to the surfaces (no --t1)" : registration);
@@ -679,7 +692,7 @@ LoadedInputs load_and_check_inputs(Hemisphere (&hemis)[2], const SubjectInputs& 
   r.compare = !in.normative.empty();
   if (r.compare) r.reference = read_reference(in.normative);
   // Refused before any map is computed; without --require-age the comparison says so (step 5).
-  if (r.compare && r.reference.age_model && !(in.age > 0) && options.require_age)
+  if (r.compare && has_age_model(r.reference) && !(in.age > 0) && options.require_age)
     throw InputError(in.normative + ": the reference has an age model but no --age was given; give --age YEARS, or drop "
                                     "--require-age to compare without age adjustment");
   if (options.normalize != "none" && options.normalize != "global") r.mask = std::make_unique<io::Volume>(io::read_volume(options.normalize));
@@ -777,17 +790,48 @@ Normalisation subject_normalisation(const Hemisphere (&hemis)[2], const SubjectI
 
 // Step 3. PET by normal projection from the pial surface inward (Zou et al. 2011, section 5.2),
 // then normalised. Sets `registration` for the report's quality flags.
+// The PET's coverage of one hemisphere's cortex (its vertices on the pial surface, Vw in the
+// PET's world): counted into h, and a warning (log, --json, report) when part of it has no value.
+void note_cortex_coverage(Hemisphere& h, const io::Volume& pet, const MatrixXd& Vw, RunSummary& summary) {
+  std::vector<bool> in_cortex(static_cast<std::size_t>(Vw.rows()), false);
+  for (const int v : h.cortex) in_cortex[static_cast<std::size_t>(v)] = true;
+  SamplingOptions count_only;
+  count_only.max_outside_fraction = 1.0;  // the refusal above has run on the whole surface
+  SamplingResult coverage;
+  check_field_of_view(pet, Vw, in_cortex, count_only, coverage);
+  h.cortex_vertices = coverage.vertices_checked;
+  h.cortex_outside = coverage.vertices_outside;
+  h.cortex_no_value = 0;
+  for (const int v : h.cortex) h.cortex_no_value += !std::isfinite(h.pet[v]);
+  if (h.cortex_no_value == 0 && h.cortex_outside == 0) return;
+  std::ostringstream w;
+  w.precision(3);
+  w << h.name << " hemisphere: ";
+  if (h.cortex_outside > 0)
+    w << h.cortex_outside << " of the cortex's " << h.cortex_vertices << " vertices (" << 100.0 * h.cortex_outside / h.cortex_vertices
+      << " %) lie outside the PET's field of view (sampled only where their inward segments enter it)" << (h.cortex_no_value > 0 ? ", " : "");
+  if (h.cortex_no_value > 0)
+    w << h.cortex_no_value << (h.cortex_outside > 0 ? "" : " of the cortex's " + std::to_string(h.cortex_vertices) + " vertices")
+      << " have no PET value (out of view or NaN voxels; elements average the rest)";
+  w << ": check the scan's coverage";
+  summary.warnings.push_back(w.str());
+}
+
 Normalisation sample_and_normalise(Hemisphere (&hemis)[2], const SubjectInputs& in, const RunOptions& options,
                                    const LoadedInputs& inputs, StepLog& log, RunSummary& summary, std::string& registration) {
   log.begin("PET sampling");
   SamplingOptions so;
   so.depth_mm = options.depth_mm;
+  so.alignment_hint = "its alignment with the subject's surfaces (FreeSurfer c_ras; --t1 registers the PET to the subject's T1)";
   const Eigen::Matrix4d t1_to_pet = register_pet_to_t1(in, inputs.pet, log, registration);
   for (Hemisphere& h : hemis) {
     const MatrixXd Vw = transform_points(t1_to_pet * h.pial.to_scanner, h.pial.mesh.V);
     h.sampling = sample_normal_projection(inputs.pet, Vw, h.pial.mesh.F, so);
     h.pet = h.sampling.values;
+    for (const std::string& n : h.sampling.notes) log.note(h.name + " pial surface: " + n);
+    note_cortex_coverage(h, inputs.pet, Vw, summary);
   }
+  log.note_new_warnings(summary.warnings);
   const Normalisation norm = subject_normalisation(hemis, in, options, inputs.pet, inputs.mask.get());
   for (Hemisphere& h : hemis) apply_normalisation(h.pet, norm);
   log.note(hemis[0].sampling.method + "; normalisation: " + (norm.description.empty() ? "none" : norm.description));
@@ -833,10 +877,10 @@ Comparison compare_step(const NormativeReference& reference, const ElementTable&
     log.note(std::to_string(dropped) + " clusters of fewer than " + std::to_string(options.min_cluster_elements) + " elements not reported");
   for (const std::string& n : cmp.notes) log.note(n);
   // z silently not age adjusted would read as adjusted (issue 15: up to 1.2 in z at 75 years).
-  if (reference.age_model && !cmp.age_adjusted)
+  if (has_age_model(reference) && !cmp.age_adjusted)
     summary.warnings.push_back("the reference " + in.normative +
                                " has an age model but the subject's age is unknown (--age): z-scores are NOT age adjusted");
-  for (const std::string& w : summary.warnings) log.note("warning: " + w);
+  log.note_new_warnings(summary.warnings);
   summary.abnormal_elements = cmp.num_hypo + cmp.num_hyper;
   summary.clusters = static_cast<int>(cmp.clusters.size());
   summary.clusters_json = clusters_json(cmp.clusters);
@@ -906,7 +950,9 @@ io::SurfaceWriteOptions write_hemisphere_surfaces(const Hemisphere& h, const Sub
                                                {&h.pial, "pial", h.left ? in.lh_pial : in.rh_pial}}) {
     const std::string name = out.names.surface(h.tag, kind);
     write_anatomical_surface((out.stage / name).string(), *surface, wo.anatomical_structure, kind);
-    out.sidecars.add(name, {{"description", "the subject's " + kind + " surface in scanner RAS (mm), as read from " + source}});
+    out.sidecars.add(name, {{"description", "the subject's " + kind + " surface in scanner RAS (mm), as read from " + source},
+                            {"units", "mm"},
+                            {"space", "scanner RAS"}});
     out.spec.push_back({wo.anatomical_structure, "SURFACE", name});
   }
   const std::string flat_name = out.names.flat(h.tag);
@@ -915,6 +961,8 @@ io::SurfaceWriteOptions write_hemisphere_surfaces(const Hemisphere& h, const Sub
   // unless a dividing edge could not be flipped and was split (core/conformal_map.h, step 3).
   if (flat.num_vertices() == h.white.mesh.num_vertices()) out.spec.push_back({wo.anatomical_structure, "SURFACE", flat_name});
   out.sidecars.add(flat_name, {{"description", "authalic flat map; square side sqrt(cortical area) mm"},
+                               {"units", "mm"},
+                               {"space", wo.metadata.at("space")},
                                {"metrics", {{"flips", h.metrics.flips}, {"element_area_cv", h.metrics.element_cv}}}});
   return wo;
 }
@@ -937,6 +985,9 @@ void write_rectangle_part(const Hemisphere& h, const HemisphereRectangles& rect,
   if (rflat.num_vertices() == h.white.mesh.num_vertices()) out.spec.push_back({wo.anatomical_structure, "SURFACE", rect_name});
   out.sidecars.add(rect_name, {{"description", "this hemisphere's part of the whole-brain 2:1 rectangle (left part x in [0, w_L], "
                                                "right part [w_L, 2] before scaling by sqrt(total cortical area / 2) mm)"},
+                               {"units", "mm"},
+                               {"space", ro.metadata.at("space")},
+                               {"seam_x_mm", rect.split * std::sqrt(total / 2.0)},
                                {"metrics", {{"flips", rect_metrics.flips}, {"element_area_cv", rect_metrics.element_cv},
                                             {"element_grid", {2 * options.k, options.k}}, {"left_part_width", rect.split}}}});
 }
@@ -970,7 +1021,9 @@ void write_hemisphere_pet(const Hemisphere& h, const ElementTable& table, int K,
   write_element_labels((out.stage / labels_name).string(), h.elements, table.grid);
   out.spec.push_back({wo.anatomical_structure, "LABEL", labels_name});
   out.sidecars.add(labels_name, {{"description", "each vertex's equal-area element: key = element id + 1 (id = row x K + column), 0 = "
-                                                 "in no element; pairs with the white and pial surfaces (the input's vertices)"}});
+                                                 "in no element; pairs with the white and pial surfaces (the input's vertices)"},
+                                 {"units", "element key (no unit)"},
+                                 {"element_grid", {K, K}}});
 }
 
 // One hemisphere's z-scores: element NIfTI and picture, and per vertex.
@@ -983,6 +1036,7 @@ void write_hemisphere_zscores(const Hemisphere& h, const std::vector<double>& z,
                       ElementImageKind::kZScore, "authalic z " + h.name);
   out.sidecars.add(zimg, {{"description", "element z-scores, z = (factor x patient - reference mean) / (reference SD x sqrt(1 + 1/n)); "
                                           "factor: the patient's rescaling to the reference over its normal elements (1 = none)"},
+                          {"units", "z (standard deviations of the reference controls)"},
                           {"space", element_space_note(mean_element_area(zb))},
                           {"rescale_factor", cmp.scale},
                           {"rescale_elements", cmp.scale_elements}});
@@ -1001,7 +1055,8 @@ void write_hemisphere_zscores(const Hemisphere& h, const std::vector<double>& z,
   const std::string zfunc = out.names.zscore(h.tag);
   io::write_per_vertex((out.stage / zfunc).string(), element_values_at_vertices(h.elements.vertex_element, z.data(),
                                                                                static_cast<int>(z.size())), zo);
-  out.sidecars.add(zfunc, {{"description", "per-vertex z: the z of the vertex's element; pairs with the white and pial surfaces"}});
+  out.sidecars.add(zfunc, {{"description", "per-vertex z: the z of the vertex's element; pairs with the white and pial surfaces"},
+                           {"units", "z (standard deviations of the reference controls)"}});
   out.spec.push_back({zo.anatomical_structure, "METRIC", zfunc});
 }
 

@@ -216,8 +216,8 @@ void check_field_of_view(const io::Volume& volume, const MatrixXd& V_world, cons
   if (result.outside_fraction > options.max_outside_fraction)
     throw InputError(volume_name(volume) + ": " + format_number(100.0 * result.outside_fraction, 3) + "% of the surface's vertices (" +
                      std::to_string(outside) + " of " + std::to_string(checked) +
-                     ") lie outside the volume's field of view; check that the surface belongs to this scan and the "
-                     "surface-to-volume transform (--surface-to-volume, FreeSurfer c_ras)");
+                     ") lie outside the volume's field of view; check that the surface belongs to this scan and " +
+                     options.alignment_hint);
   if (outside > 0)
     result.notes.push_back(std::to_string(outside) + " of " + std::to_string(checked) + " vertices (" +
                            format_number(100.0 * result.outside_fraction, 3) + "%) lie outside the volume's field of view");

@@ -63,6 +63,8 @@ struct SamplingOptions {
   int min_ribbon_samples = 11;   // ribbon mode: at least this many samples from white to pial
   // Refuse (InputError) when more than this fraction of the vertices is outside the field of view.
   double max_outside_fraction = 0.5;
+  // What that refusal tells the user to check, besides whether the surface belongs to the scan.
+  std::string alignment_hint = "the surface-to-volume transform (--surface-to-volume, FreeSurfer c_ras)";
 };
 
 struct SamplingResult {

@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -152,9 +153,20 @@ std::vector<std::string> subject_args(const std::string& exe, const CohortSubjec
 
 // An existing reference given with --normative: read and checked against --k and --normalize
 // before any map is computed (a mismatch would only show after every subject had run).
-void check_reference(const GroupArgs& a) {
-  if (a.normative.empty()) return;
+void check_reference(const GroupArgs& a, const std::vector<CohortSubject>& subjects) {
+  if (a.normative.empty()) {
+    // The reference is built from the controls: too few and every subject would run for nothing.
+    const auto controls = std::count_if(subjects.begin(), subjects.end(), [](const CohortSubject& s) { return s.role == "control"; });
+    if (controls < analysis::kMinControls)
+      throw InputError(a.cohort + ": " + std::to_string(controls) + " control(s); a reference needs at least " +
+                       std::to_string(analysis::kMinControls) + ": add controls, or give an existing reference (--normative)");
+    return;
+  }
   const analysis::NormativeReference ref = analysis::read_reference(a.normative);
+  const std::string normalisation = a.normalize == "none" || a.normalize == "global" ? a.normalize : "reference-region";
+  if (ref.normalisation != normalisation)
+    throw InputError(a.normative + ": the reference's values are normalised '" + ref.normalisation + "' but the subjects' would be '" +
+                     normalisation + "' (--normalize " + a.normalize + "); give the reference's --normalize or another reference");
   if (ref.grid.domain.kind != DomainKind::Square || ref.grid.k != a.k)
     throw InputError(a.normative + ": the reference has " + to_string(ref.grid.domain) + " K = " + std::to_string(ref.grid.k) +
                      " elements but the subjects would get square K = " + std::to_string(a.k) + "; give --k " +
@@ -190,14 +202,16 @@ void write_participants(const std::string& out, const std::vector<CohortSubject>
 
 int run_group(const GroupArgs& a) {
   const auto subjects = read_cohort(a.cohort);
-  check_reference(a);
+  check_reference(a, subjects);
   if (fs::exists(a.out) && !fs::is_empty(a.out) && !a.force)
     throw InputError(a.out + ": output folder exists and is not empty; choose another or pass --force");
   fs::create_directories(fs::path(a.out) / "logs");
   const std::string exe = self_executable();
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  // The threads to share: --threads when given (0: all cores), bounded: jobs x threads <= that.
+  const int cores = global_options().threads > 0 ? global_options().threads
+                                                 : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const int parallel = std::max(1, a.jobs);
-  const int threads = std::max(1, cores / parallel);  // bounded: jobs x threads <= cores
+  const int threads = std::max(1, cores / parallel);
   const ProgressFn progress = terminal_progress();
 
   // Every subject's folder at the top of OUT (BIDS: OUT/sub-<id>/); participants.tsv gives each one's group.
@@ -287,7 +301,7 @@ const bool registered = register_command({60, [](CLI::App& parent) {
       "A failed subject is reported and does not stop the others (exit 3 at the end).");
   sub->add_option("cohort", args->cohort, "Cohort list (CSV)")->required()->check(CLI::ExistingFile);
   sub->add_option("out", args->out, "Output folder")->required();
-  sub->add_option("--jobs,-j", args->jobs, "Subjects processed at once (threads are shared among them)")
+  sub->add_option("--jobs,-j", args->jobs, "Subjects processed at once (the --threads, or all cores, are shared among them)")
       ->check(CLI::PositiveNumber);
   add_k_option(*sub, args->k, {DomainKind::Square}, 2, 512);
   sub->add_flag("--force", args->force, "Write into an existing output folder");

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
+#include <string>
 #include <nlohmann/json.hpp>
 
 #include "analysis/normative.h"
@@ -108,6 +110,26 @@ int run_merge(const MergeArgs& a) {
   return 0;
 }
 
+// An element label file written by `authalic elements` or `run` records its grid and hemisphere:
+// one of another K, domain or hemisphere would put every vertex's z on the wrong element.
+void check_element_label_fits(const std::string& path, const analysis::NormativeReference& ref, const std::string& hemisphere) {
+  const std::map<std::string, std::string> meta = io::read_per_vertex_metadata(path);
+  auto recorded = [&](const char* key) {
+    const auto it = meta.find(key);
+    return it == meta.end() ? std::string() : it->second;
+  };
+  const std::string k = recorded("k"), domain = recorded("domain"), structure = recorded("AnatomicalStructurePrimary");
+  const std::string grid = to_string(ref.grid.domain);
+  if ((!k.empty() && k != std::to_string(ref.grid.k)) || (!domain.empty() && domain != grid))
+    throw InputError(path + ": element labels of a " + (domain.empty() ? std::string("?") : domain) + " grid at K = " +
+                     (k.empty() ? std::string("?") : k) + ", but the reference has a " + grid + " grid at K = " +
+                     std::to_string(ref.grid.k) + "; give the .label.gii written with the reference's K");
+  const std::string expected = hemisphere == "left" ? "CortexLeft" : hemisphere == "right" ? "CortexRight" : "";
+  if (!structure.empty() && !expected.empty() && structure != expected)
+    throw InputError(path + ": element labels of " + structure + " given for the reference's " + hemisphere +
+                     " hemisphere block; give the --labels files in the order of the reference's blocks");
+}
+
 int run_compare(const CompareArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
@@ -135,7 +157,9 @@ int run_compare(const CompareArgs& a) {
                        return s;
                      }());
   std::vector<VectorXi> vertex_elements;
-  for (const auto& path : a.labels) {
+  for (std::size_t i = 0; i < a.labels.size(); ++i) {
+    const std::string& path = a.labels[i];
+    check_element_label_fits(path, ref, ref.hemispheres[i]);
     const VectorXd keys = io::read_per_vertex(path);
     VectorXi ve(keys.size());
     for (Eigen::Index v = 0; v < keys.size(); ++v) {

@@ -123,7 +123,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   sub->add_option("--lh-cortex", in.lh_cortex, "Left cortex region: FreeSurfer label or GIFTI label/mask (its vertices), or a surface on the same vertices whose triangles are the cortex (.surf.gii, e.g. a flat patch); one disk");
   sub->add_option("--rh-cortex", in.rh_cortex, "Right cortex region");
   sub->add_option("--subjects-dir", a->subjects_dir, "FreeSurfer SUBJECTS_DIR (instead of the six inputs above); default: the SUBJECTS_DIR environment variable");
-  sub->add_option("--subject", a->subject, "FreeSurfer subject name in --subjects-dir (or $SUBJECTS_DIR)");
+  sub->add_option("--subject", a->subject, "FreeSurfer subject name in --subjects-dir (or $SUBJECTS_DIR); the output id (without --id) is its letters and digits, a leading sub- dropped (sub-01 -> sub-01/)");
   sub->add_option("--pet", in.pet, "PET volume registered to the surfaces (NIfTI, MGH/MGZ, DICOM folder); world = scanner RAS");
   sub->add_option("--t1", in.t1, "T1 MRI the surfaces belong to: the PET is rigidly registered to it (ITK v4, Mattes mutual information) before sampling; without it the PET is assumed co-registered");
   sub->add_option("--atlas", a->options.atlas_dir,

@@ -81,6 +81,19 @@ std::vector<CohortSubject> read_cohort(const std::string& path) {
                                    "rh_white",   "rh_pial", "lh_cortex", "rh_cortex"};
   for (const char* r : required)
     if (!col.count(r)) throw InputError(path + ": the header has no column '" + r + "'; see `authalic group --help`");
+  // Other columns are kept as the user's own, but one that is a known column spelt otherwise
+  // ("Sex", "T1") would silently leave its values unused.
+  std::vector<std::string> known(std::begin(required), std::end(required));
+  known.insert(known.end(), {"age", "sex", "t1", "lh_sphere_reg", "rh_sphere_reg"});
+  auto lower = [](std::string x) {
+    for (char& c : x) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return x;
+  };
+  for (const std::string& h : header)
+    for (const std::string& k : known)
+      if (h != k && lower(h) == k)
+        throw InputError(path + ": column '" + h + "' would be ignored: the column is '" + k + "' (names are lower case)");
+
   std::vector<CohortSubject> subjects;
   std::set<std::string> seen;
   for (std::size_t r = 1; r < records.size(); ++r) {
@@ -94,6 +107,9 @@ std::vector<CohortSubject> read_cohort(const std::string& path) {
     };
     const int lineno = records[r].line;
     const std::string where = path + ":" + std::to_string(lineno);
+    if (cells.size() != header.size())
+      throw InputError(where + ": " + std::to_string(cells.size()) + " fields, but the header has " + std::to_string(header.size()) +
+                       " columns; check the row for a missing or extra comma (a field with a comma needs quotes)");
     CohortSubject s;
     s.id = get("subject_id");
     if (s.id.empty()) throw InputError(where + ": empty subject_id");

@@ -252,6 +252,20 @@ TEST(Normative, AgeModelEqualsDirectLeastSquaresFit) {
   add_subject(mixed, ageless, "ageless.csv");
   EXPECT_FALSE(mixed.age_model);
   EXPECT_TRUE(mixed.comoment.empty());
+  // Controls all of one age: no slope to fit, so z is the plain one and says so (it claimed to
+  // be age adjusted).
+  std::vector<ElementTable> same_age = tables;
+  for (auto& t : same_age) t.age = 70.0;
+  const NormativeReference flat = build_from(same_age, 0, 15);
+  EXPECT_TRUE(flat.age_model);
+  EXPECT_FALSE(has_age_model(flat));
+  EXPECT_TRUE(has_age_model(ref));
+  const Comparison no_slope = compare_to_reference(flat, patient, plain_sd);
+  EXPECT_FALSE(no_slope.age_adjusted);
+  EXPECT_NEAR(no_slope.z[e], (0.8 - my) / std::sqrt(syy / 14), 1e-9);
+  bool noted = false;
+  for (const auto& n : no_slope.notes) noted = noted || n.find("all of one age") != std::string::npos;
+  EXPECT_TRUE(noted);
 }
 
 // Leaving a control out by undoing its Welford update (for the chance clusters) gives the

@@ -157,7 +157,7 @@ TEST(AtlasCli, RunWithTheAtlasButNoSphereRegRegistersTheMapsAndSaysSo) {
       << out;
   EXPECT_NE(out.find("lh.sphere.reg is missing: element correspondence by registration to the atlas map"), std::string::npos) << out;
   EXPECT_NE(out.find("mode 'registration'"), std::string::npos) << out;
-  const std::string base = dir + "/out/sub-subcontrol01/sub-subcontrol01";
+  const std::string base = dir + "/out/sub-control01/sub-control01";  // the BIDS name, not sub-subcontrol01
   const nlohmann::json elements = nlohmann::json::parse(std::ifstream(base + "_elements.json"));
   const std::string mode = elements["metadata"]["correspondence"];
   EXPECT_EQ(mode.rfind("registration ", 0), 0u) << mode;

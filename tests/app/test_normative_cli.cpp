@@ -4,8 +4,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "analysis/normative.h"
 #include "common/test_data.h"
@@ -99,6 +101,26 @@ TEST(NormativeCli, BuildMergeCompare) {
     const auto jo = nlohmann::json::parse(std::ifstream(dir + "/cmp_old.json"));
     EXPECT_TRUE(jo["clusters"][0]["p_controls"].is_null());
     EXPECT_EQ(jo["chance_clusters"]["measured"], false);
+  }
+  // Element labels written for another grid or the other hemisphere (their metadata says so) would
+  // put every vertex's z on the wrong element: refused, nothing written.
+  const VectorXi keys = (VectorXi(4) << 1, 6, 7, 0).finished();
+  for (const auto& [name, meta, said] :
+       {std::tuple<std::string, std::map<std::string, std::string>, std::string>{
+            "k8", {{"k", "8"}, {"domain", "square"}}, "element labels of a square grid at K = 8, but the reference has a square grid at K = 4"},
+        {"right", {{"k", "4"}, {"domain", "square"}}, "element labels of CortexRight given for the reference's left hemisphere block"}}) {
+    io::FuncWriteOptions fo;
+    fo.metadata = meta;
+    if (name == "right") fo.anatomical_structure = "CortexRight";
+    io::write_label_gifti(dir + "/" + name + ".label.gii", keys, {{0, "none"}, {1, "a"}, {6, "b"}, {7, "c"}}, fo);
+    std::string refused;
+    EXPECT_EQ(test::run_command(exe + " normative compare " + dir + "/merged.json " + dir + "/p1_elements.csv " + dir + "/cmp_" + name +
+                                    " --labels " + dir + "/" + name + ".label.gii",
+                                &refused),
+              2)
+        << refused;
+    EXPECT_NE(refused.find(name + ".label.gii: " + said), std::string::npos) << refused;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/cmp_" + name + ".json"));
   }
   for (const char* suffix : {"_z.nii.gz", "_z.png", "_abnormal.csv", ".json", "_z.func.gii"})
     EXPECT_TRUE(std::filesystem::exists(dir + "/cmp" + suffix)) << suffix;

@@ -515,6 +515,11 @@ TEST(ReliabilityCli, GroupValidatesIdsAndAgesBeforeAnyFile) {
   const std::string age = write_cohort(dir, {"c01,control,7O," + pet});
   EXPECT_EQ(test::run_command(bin() + " group " + q(age) + " " + q(dir + "/g2"), &out), 2) << out;
   EXPECT_NE(out.find("age '7O' is not a number"), std::string::npos) << out;
+  // A row with a field missing: said so (it read as "empty rh_cortex", the fields shifted).
+  const std::string short_row = write_cohort(dir, {"c01,control," + pet});
+  EXPECT_EQ(test::run_command(bin() + " group " + q(short_row) + " " + q(dir + "/g3"), &out), 2) << out;
+  EXPECT_NE(out.find("cohort.csv:2: 9 fields, but the header has 10 columns"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/g3"));
 }
 
 // Issue 15 item 14: the cohort list is read as spreadsheets write CSV (libcsv): a UTF-8 byte-order
@@ -560,9 +565,21 @@ TEST(ReliabilityCli, GroupTakesRunOptionsAndAnExistingReference) {
   EXPECT_NE(out.find("the reference has square K = 32 elements but the subjects would get square K = 16"), std::string::npos) << out;
   EXPECT_EQ(lines_of(out), 1) << out;
   EXPECT_FALSE(fs::exists(dir + "/k16")) << "refused before any folder or map";
+  // So are a reference of another normalisation (every patient failed after every map) and, with
+  // no reference, fewer controls than a reference needs (every subject ran, then exit 3).
+  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/none") + " --normalize none --normative " + q(ref), &out), 2)
+      << out;
+  EXPECT_NE(out.find("the reference's values are normalised 'global' but the subjects' would be 'none'"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/none"));
+  fs::create_directories(dir + "/c2");
+  const std::string two = write_cohort(dir + "/c2", {"c01,control,60," + pet, "c02,control,61," + pet, "p01,patient,68.2," + pet});
+  EXPECT_EQ(test::run_command(bin() + " group " + q(two) + " " + q(dir + "/two"), &out), 2) << out;
+  EXPECT_NE(out.find("2 control(s); a reference needs at least 3"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/two"));
 
+  // --threads is shared among the subjects (it was ignored: each got the machine's cores / jobs).
   ASSERT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/g") + " --normative " + q(ref) +
-                                  " --threshold 3 --no-rectangle -q",
+                                  " --threshold 3 --no-rectangle -q --threads 1 --jobs 1",
                               &out),
             0)
       << out;
@@ -573,6 +590,7 @@ TEST(ReliabilityCli, GroupTakesRunOptionsAndAnExistingReference) {
   std::ifstream sc(subject + "/sub-p01_hemi-L_desc-elements_zscore.json");
   const std::string text((std::istreambuf_iterator<char>(sc)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("\"z_threshold\": 3.0"), std::string::npos) << text;
+  EXPECT_NE(text.find("--threads 1 "), std::string::npos) << text;
 }
 
 // Issue 15 item 14: the optional cohort columns sex (F, M, O; female/male/other accepted) and t1
@@ -597,6 +615,10 @@ TEST(ReliabilityCli, CohortOptionalSexAndT1Columns) {
   EXPECT_NE(out.find("badt1.csv:2: t1 file " + dir + "/none.nii does not exist"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/b"));
   EXPECT_FALSE(fs::exists(dir + "/t"));
+  // A known column spelt otherwise would leave its values unused: refused.
+  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort("capital.csv", ",Sex", ",F")) + " " + q(dir + "/c"), &out), 2) << out;
+  EXPECT_NE(out.find("capital.csv: column 'Sex' would be ignored: the column is 'sex'"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir + "/c"));
   ASSERT_EQ(test::run_command(bin() + " group " + q(cohort("ok.csv", ",sex,t1", ",female,")) + " " + q(dir + "/g") +
                                   " --normative " + q(ref) + " --no-rectangle -q",
                               &out),
@@ -670,7 +692,7 @@ std::vector<pid_t> children_of(pid_t parent) {
 TEST(ReliabilityCli, KilledGroupTakesItsRunningSubjectsWithIt) {
   const std::string dir = test::temp_dir("rel-group-kill");
   const std::string pet = sample("sub-patient01/sub-patient01_pet.nii.gz");
-  const std::string cohort = write_cohort(dir, {"c01,control,60," + pet, "c02,control,61," + pet});
+  const std::string cohort = write_cohort(dir, {"c01,control,60," + pet, "c02,control,61," + pet, "c03,control,62," + pet});
   const pid_t group = ::fork();
   ASSERT_GE(group, 0);
   if (group == 0) {

@@ -332,5 +332,60 @@ TEST(RobustnessCli, PetOrientationDoesNotChangeTheValuesAndMissingOrientationIsR
   EXPECT_FALSE(fs::exists(fx.dir + "/x.func.gii"));
 }
 
+
+// A PET that misses part of the cortex (the sample patient's, moved 25 mm to the right): `run`
+// still maps and compares, but says so: a warning in --json, the log and the report, counted
+// over the cortex's vertices (not the pial surface's, medial wall included).
+TEST(RobustnessCli, RunWarnsWhenThePetMissesPartOfTheCortex) {
+  const std::string dir = test::temp_dir("robust-run-coverage");
+  const std::string s = std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/";
+  io::Volume pet = io::read_volume(s + "sub-patient01/sub-patient01_pet.nii.gz");
+  pet.vox2ras(0, 3) += 25.0;
+  io::write_nifti(dir + "/shifted.nii.gz", pet);
+  std::string out;
+  std::string args = run_args(dir + "/out");
+  args.replace(args.find(q(s + "sub-patient01/sub-patient01_pet.nii.gz")), q(s + "sub-patient01/sub-patient01_pet.nii.gz").size(),
+               q(dir + "/shifted.nii.gz"));
+  ASSERT_EQ(test::run_command(args + " --json 2>/dev/null", &out), 0) << out;
+  const nlohmann::json j = nlohmann::json::parse(out.substr(out.find('{')));
+  std::string warning;
+  for (const auto& w : j.at("warnings"))
+    if (w.get<std::string>().find("outside the PET's field of view") != std::string::npos) warning = w;
+  ASSERT_FALSE(warning.empty()) << j.at("warnings").dump();
+  EXPECT_EQ(warning.rfind("left hemisphere: ", 0), 0u) << warning;  // the right one is still covered
+  EXPECT_NE(warning.find(" of the cortex's 3579 vertices ("), std::string::npos) << warning;
+  EXPECT_NE(warning.find("check the scan's coverage"), std::string::npos) << warning;
+  std::ifstream log(dir + "/out/sub-patient01/sub-patient01_log.txt");
+  const std::string log_text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(log_text.find("warning: " + warning), std::string::npos) << log_text;
+  EXPECT_EQ(log_text.find("warning: " + warning), log_text.rfind("warning: " + warning)) << "logged once";
+}
+
+// Every sidecar of a spatial file states its units and space as keys (they were only in the
+// prose of some descriptions).
+TEST(RobustnessCli, RunSidecarsStateUnitsAndSpace) {
+  const std::string dir = test::temp_dir("robust-run-sidecars");
+  std::string out;
+  ASSERT_EQ(test::run_command(run_args(dir + "/out") + " --normative " + q(std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/normative.json") +
+                                  " --age 68.2",
+                              &out),
+            0)
+      << out;
+  const std::string base = dir + "/out/sub-patient01/sub-patient01_hemi-L_";
+  auto sidecar = [&](const std::string& name) { return nlohmann::json::parse(std::ifstream(base + name + ".json")); };
+  for (const char* surface : {"white", "pial"}) {
+    EXPECT_EQ(sidecar(surface).at("units"), "mm") << surface;
+    EXPECT_EQ(sidecar(surface).at("space"), "scanner RAS") << surface;
+  }
+  for (const char* flat : {"space-authalic_flat", "space-authalicrect_flat"}) {
+    EXPECT_EQ(sidecar(flat).at("units"), "mm") << flat;
+    EXPECT_NE(sidecar(flat).at("space").get<std::string>().find("authalic"), std::string::npos) << flat;
+  }
+  EXPECT_GT(sidecar("space-authalicrect_flat").at("seam_x_mm").get<double>(), 0.0);
+  for (const char* z : {"zscore", "desc-elements_zscore"})
+    EXPECT_EQ(sidecar(z).at("units").get<std::string>().rfind("z (standard deviations", 0), 0u) << z;
+  EXPECT_EQ(sidecar("desc-elements_dseg").at("element_grid"), nlohmann::json::array({32, 32}));
+}
+
 }  // namespace
 }  // namespace authalic
