@@ -578,7 +578,9 @@ void rescale_to_reference(Comparison& out, const std::vector<double>& value, dou
 // z, flags and clusters of one table against one reference (compare_to_reference without the
 // chance clusters).
 Comparison compare_elements(const NormativeReference& ref, const ElementTable& patient, const CompareOptions& options) {
-  check_compatible(ref, patient, patient.subject_id.empty() ? std::string("patient table") : "patient " + patient.subject_id);
+  const std::string subject = patient.subject_id.empty() ? std::string("patient table") : "patient " + patient.subject_id;
+  check_shapes(shape_of(ref), shape_of(patient), options.patient_name.empty() ? subject : options.patient_name + " (" + subject + ")",
+               options.reference_name);
   if (!(options.threshold > 0)) throw InputError("--threshold: must be > 0 (|z| flagged as abnormal)");
   if (ref.partial)
     throw InputError(options.reference_name + ": is a partial reference (" + std::to_string(ref.subjects.size()) +

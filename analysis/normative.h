@@ -150,6 +150,7 @@ void check_reference_usable(const NormativeReference& reference, const std::stri
 
 struct CompareOptions {
   std::string reference_name = "the normative reference";  // the file, for messages
+  std::string patient_name;      // the patient's element table (file), for messages; "" names the subject
   double threshold = 2.0;        // |z| at or beyond which an element is abnormal
   bool use_age = true;           // use the age model when the reference has one and the age is known
   double age = std::numeric_limits<double>::quiet_NaN();  // patient's age (years); NaN = from the table

@@ -142,6 +142,7 @@ int run_compare(const CompareArgs& a) {
   const analysis::ElementTable patient = analysis::read_element_table(a.patient);
   analysis::CompareOptions o;
   o.reference_name = a.reference;
+  o.patient_name = a.patient;
   o.threshold = a.threshold;
   o.age = a.age;
   o.use_age = !a.no_age;

@@ -166,7 +166,8 @@ TEST(NormativeCli, BuildMergeCompare) {
   }
   analysis::write_element_table(dir + "/p2_elements.csv", small);
   EXPECT_EQ(test::run_command(exe + " normative compare " + dir + "/merged.json " + dir + "/p2_elements.csv " + dir + "/cmp2", &out), 2);
-  EXPECT_NE(out.find("K is 2 but the reference has 4"), std::string::npos) << out;
+  // Both files are named (it said "patient p2: ... but the reference has 4").
+  EXPECT_NE(out.find("p2_elements.csv (patient p2): K is 2 but " + dir + "/merged.json has 4"), std::string::npos) << out;
 }
 
 }  // namespace
