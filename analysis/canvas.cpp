@@ -242,7 +242,9 @@ std::vector<double> nice_ticks(double lo, double hi, int target, double* step_ou
   std::vector<double> ticks;
   if (!std::isfinite(lo) || !std::isfinite(hi)) return ticks;
   if (hi < lo) std::swap(lo, hi);
-  if (hi == lo) {
+  // A range lost in rounding (constant values whose means differ in the last bits) is one value:
+  // a step of 1e-17 at 1.0 never advanced k (k + 1 == k beyond 2^53), and the ticks filled memory.
+  if (hi - lo <= 1e-9 * std::max(std::abs(lo), std::abs(hi))) {
     if (step_out) *step_out = std::abs(lo) > 0 ? std::abs(lo) : 1.0;
     ticks.push_back(lo);
     return ticks;

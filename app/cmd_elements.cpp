@@ -12,6 +12,7 @@
 
 #include "analysis/elements.h"
 #include "app/command.h"
+#include "app/map_json.h"
 #include "core/error.h"
 #include "core/version.h"
 #include "io/surface_formats.h"
@@ -107,12 +108,32 @@ int run_elements(const ElementsArgs& a) {
 
   const auto compute_start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
-  const analysis::ElementMap em =
-      analysis::prepare_element_map(surface.mesh.V,
-                                    map.mesh.num_vertices() > surface.mesh.num_vertices()  // appended vertices to trace
-                                        ? faces_in_map_region(surface.mesh.F, map.mesh.F, surface.mesh.num_vertices())
-                                        : surface.mesh.F,
-                                    map.mesh.V, map.mesh.F, values, domain, a.map);
+  // Vertices the flattening appended (corner and ear splits): placed on the surface, with their
+  // values, from the map's record of them (flatten writes it; the disk map always has some), else
+  // traced from the map's triangles.
+  const int nv = surface.mesh.num_vertices(), inserted = map.mesh.num_vertices() - nv;
+  const auto record = map.metadata.find(kInsertedVerticesKey);
+  const bool placed = inserted > 0 && record != map.metadata.end();
+  MatrixXd V3 = surface.mesh.V;
+  VectorXd vertex_values = values;
+  if (placed) {
+    V3 = place_inserted_vertices(surface.mesh.V, record->second, inserted, a.map);
+    MatrixXd columns = MatrixXd::Zero(nv, 3);
+    columns.col(0) = values;
+    vertex_values = place_inserted_vertices(columns, record->second, inserted, a.map).col(0);  // linear, as the map's positions
+  }
+  analysis::ElementMap em =
+      analysis::prepare_element_map(V3,
+                                    placed          ? map.mesh.F
+                                    : inserted > 0  ? faces_in_map_region(surface.mesh.F, map.mesh.F, nv)  // appended vertices to trace
+                                                    : surface.mesh.F,
+                                    map.mesh.V, map.mesh.F, vertex_values, domain, a.map);
+  if (placed) {  // the per-vertex outputs pair with the surface: its vertices only
+    em.num_surface_vertices = nv;
+    em.inserted_vertices = inserted;
+    em.notes.push_back(std::to_string(inserted) + " vertices appended by the flattening were placed from the map's " +
+                       kInsertedVerticesKey + " record");
+  }
   const analysis::ElementResult result = analysis::compute_elements(em, grid, surface.to_scanner);
   const double compute_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - compute_start).count();
   const double compute_cpu_seconds = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;  // all threads
@@ -199,7 +220,8 @@ const bool registered = register_command({45, [](CLI::App& parent) {
                   "concentric map)")
       ->check(CLI::IsMember({"square", "rectangle", "sphere", "disk"}))
       ->capture_default_str();
-  sub->add_option("--hemisphere", a->hemisphere, "left, right or both (default: from the surface's metadata or name)");
+  sub->add_option("--hemisphere", a->hemisphere, "left, right or both (default: from the surface's metadata or name)")
+      ->check(CLI::IsMember({"left", "right", "both"}));
   sub->add_option("--subject", a->subject, "Subject id recorded in the table (used by `authalic normative`)");
   sub->add_option("--age", a->age, "Subject's age in years, recorded for the normative age model")->check(age_years());
   sub->add_option("--normalisation", a->normalisation,

@@ -80,6 +80,12 @@ void run(const MetricsArgs& a) {
     if (Fm(f, 0) < known && Fm(f, 1) < known && Fm(f, 2) < known) keep.push_back(static_cast<int>(f));
   const int excluded = static_cast<int>(Fm.rows()) - static_cast<int>(keep.size());
   if (keep.empty()) throw InputError(a.map + ": no triangle of the map lies on the surface's vertices; check the file pair");
+  // Without the record only the few faces of the boundary's splits are left out; most of the map
+  // beyond the surface's vertices is a map of another mesh (its numbers would mean nothing).
+  if (2 * excluded > static_cast<int>(Fm.rows()))
+    throw InputError(a.map + ": " + std::to_string(excluded) + " of its " + std::to_string(Fm.rows()) + " triangles use vertices beyond the " +
+                     std::to_string(nv) + " of " + a.surface + " and it has no " + kInsertedVerticesKey +
+                     " record: it is not a map of this surface; give the surface the map was computed from");
   MatrixXi F(static_cast<Eigen::Index>(keep.size()), 3);
   for (size_t k = 0; k < keep.size(); ++k) F.row(k) = Fm.row(keep[k]);
   MatrixXd U = map.mesh.V.topRows(known);

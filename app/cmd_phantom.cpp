@@ -39,7 +39,8 @@ struct PhantomArgs {
 
 // The cohort is written into a hidden sibling folder and its entries (surf/, label/, truth/,
 // sub-*/, cohort.csv, phantom.json) are moved into OUT_DIR only when all are complete, each by one
-// rename: a killed or failed run leaves OUT_DIR as it was. Other files in OUT_DIR (a README) stay.
+// rename: a killed or failed run leaves OUT_DIR as it was. Other files in OUT_DIR (a README) stay;
+// the subjects of a cohort written there before that the new one lacks go.
 analysis::PhantomResult write_staged(const std::string& out_dir, const analysis::PhantomOptions& o) {
   const fs::path out = fs::absolute(out_dir).lexically_normal();
   std::error_code ec;
@@ -51,6 +52,13 @@ analysis::PhantomResult write_staged(const std::string& out_dir, const analysis:
     fs::remove_all(stage, ec);
     r = analysis::write_phantom(stage.string(), o, terminal_progress());
     fs::create_directories(out);
+    // A cohort written here before (its phantom.json) is replaced whole: its subjects that the new
+    // one does not have would stay beside it, listed in no cohort.csv.
+    if (fs::exists(out / "phantom.json"))
+      for (const auto& old : fs::directory_iterator(out)) {
+        const std::string name = old.path().filename().string();
+        if (old.is_directory() && name.rfind("sub-", 0) == 0 && !fs::exists(stage / name)) fs::remove_all(old.path());
+      }
     for (const auto& entry : fs::directory_iterator(stage)) {
       const fs::path target = out / entry.path().filename();
       fs::remove_all(target);

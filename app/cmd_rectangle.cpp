@@ -248,6 +248,22 @@ io::SurfaceWriteOptions flat_options(const std::string& structure, const std::st
   return wo;
 }
 
+// The vertices the cut appended (one copy of each interior path vertex), as the map-file record
+// of inserted vertices: each at the path vertex it copies (same position).
+std::string cut_copies_text(const TriMesh& surface, const WholeBrainRectangle& r) {
+  const Eigen::Index nv = surface.V.rows(), copies = r.map.V.rows() - nv;
+  if (copies <= 0) return {};
+  MatrixXi parents(copies, 2);
+  for (Eigen::Index k = 0; k < copies; ++k) {
+    int source = -1;
+    for (const int p : r.cut_path)
+      if (r.map.V.row(nv + k) == surface.V.row(p)) source = p;
+    if (source < 0) return {};  // not a copy of a path vertex: nothing recorded rather than a wrong record
+    parents.row(k) << source, source;
+  }
+  return inserted_vertices_text(parents, VectorXd::Zero(copies));
+}
+
 void run_one_surface(const RectangleArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const io::Surface s = io::read_surface(a.surface);
@@ -274,11 +290,18 @@ void run_one_surface(const RectangleArgs& a) {
   const std::string& problem = checked.problem;
   const std::string structure = s.metadata.count("AnatomicalStructurePrimary") ? s.metadata.at("AnatomicalStructurePrimary") : "";
   const SurfaceOutputs names = surface_outputs(a);
-  io::write_surface(names.map, as_flat_mesh(r.map.UV, r.map.F), flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)", problem, "none"));
+  // The cut's copies of the path vertices, recorded as `flatten` records its inserted vertices
+  // (each at its source: "source source 0"), so `metrics` and `elements` pair the map with the
+  // input surface and measure every face.
+  const std::string copies = cut_copies_text(s.mesh, r);
+  io::SurfaceWriteOptions map_options = flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)", problem, "none");
+  if (!copies.empty()) map_options.metadata[kInsertedVerticesKey] = copies;
+  io::write_surface(names.map, as_flat_mesh(r.map.UV, r.map.F), map_options);
   if (a.flat) {
     // 1 mm^2 of flat map = 1 mm^2 of cortex: the rectangle (area 2) scaled by sqrt(area / 2).
-    io::write_surface(names.flat, as_flat_mesh(r.map.UV, r.map.F, std::sqrt(r.map.area_mm2 / Domain::rectangle().area())),
-                      flat_options(structure, "rectangle scaled to the cortical area (mm)", problem, "none"));
+    io::SurfaceWriteOptions flat = flat_options(structure, "rectangle scaled to the cortical area (mm)", problem, "none");
+    if (!copies.empty()) flat.metadata[kInsertedVerticesKey] = copies;
+    io::write_surface(names.flat, as_flat_mesh(r.map.UV, r.map.F, std::sqrt(r.map.area_mm2 / Domain::rectangle().area())), flat);
   }
   if (a.cut_surface) {
     io::SurfaceWriteOptions wo;

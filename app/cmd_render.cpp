@@ -5,6 +5,7 @@
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <tuple>
 
 #include "analysis/render.h"
@@ -67,6 +68,8 @@ void setup(CLI::App& parent) {
     if (!a->values.empty() && !a->sulcal_depth_surface.empty()) {
       throw InputError("render: give --values or --sulcal-depth, not both");
     }
+    if (a->range.size() == 2 && !(a->range[0] < a->range[1]))
+      throw InputError("--range: LO must be below HI (got " + std::to_string(a->range[0]) + " " + std::to_string(a->range[1]) + ")");
     VectorXd depth;
     if (!a->sulcal_depth_surface.empty()) {
       const io::Surface s = io::read_surface(a->sulcal_depth_surface);
@@ -126,6 +129,9 @@ void setup(CLI::App& parent) {
                                  : analysis::compose_horizontal(pictures, 16, a->captions);
     io::write_png(a->out, out);
     info("render: " + a->out + " (" + std::to_string(out.width) + " x " + std::to_string(out.height) + " pixels)");
+    if (global_options().json)
+      std::cout << nlohmann::json{{"output", a->out}, {"width_px", out.width}, {"height_px", out.height}, {"maps", pictures.size()}}.dump(2)
+                << '\n';
   });
 }
 

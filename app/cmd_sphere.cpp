@@ -205,8 +205,12 @@ void run(const SphereArgs& a) {
   const std::string problem = authalic_acceptance_problem(final_metrics, final_metrics.vertex_ln_area.mean, true);
   const std::string failure = a.surface + ": the sphere map is not authalic: " + problem;
   if (!problem.empty() && !a.keep_failed)
-    throw ProcessingError(failure + "; nothing was written. Try more passes (--passes 8) or a finer background grid "
-                          "(--grid 128); --keep-failed writes the map for inspection, marked as failed");
+    throw ProcessingError(failure + "; nothing was written. " +
+                          (r.route == SphereRoute::Flow
+                               ? std::string("Try more passes (--passes 8) or a finer background grid (--grid 128); ")
+                               : std::string("Try --route flow (--passes and --grid set its flow), or check that the surface is one "
+                                             "clean closed hemisphere; ")) +
+                          "--keep-failed writes the map for inspection, marked as failed");
 
   const double area = face_areas(mesh.V, mesh.F).sum();
   const double radius = a.area_radius ? std::sqrt(area / (4.0 * M_PI)) : a.radius;
@@ -253,11 +257,11 @@ void setup(CLI::App& parent) {
   sub->add_flag("--area-radius", a->area_radius,
                 "Use the radius whose sphere area equals the surface's area (sqrt(area / 4 pi), mm) instead of --radius");
   sub->add_option("--conformal", a->conformal, "Also write the conformal initial map (GIFTI), same radius");
-  sub->add_option("--puncture", a->puncture, "Face index of Haker's puncture (default: best-shaped faces in turn)")
+  sub->add_option("--puncture", a->puncture, "Flow route: face index of Haker's puncture (default: best-shaped faces in turn)")
       ->check(CLI::NonNegativeNumber);
-  sub->add_option("--grid", a->grid, "Background cube-sphere cells per cube edge (default: from the mesh size)")
+  sub->add_option("--grid", a->grid, "Flow route: background cube-sphere cells per cube edge (default: from the mesh size)")
       ->check(in_range(8, 512));
-  sub->add_option("--passes", a->passes, "Moser flow passes")->check(in_range(0, 50))->capture_default_str();
+  sub->add_option("--passes", a->passes, "Flow route: Moser flow passes (the square route, the default's first choice, has its own)")->check(in_range(0, 50))->capture_default_str();
   sub->add_option("--route", a->route,
                   "square: through the authalic square map of all but a cap of 10 % of the area, then per-face polish on "
                   "the sphere (works on native-resolution meshes); flow: Haker's conformal sphere + Moser flow on the "

@@ -1,7 +1,9 @@
 // `authalic subdivide IN OUT [--times N] [--faces-from FILE]`: midpoint (1-to-4) subdivision of a
 // surface. The input's vertices stay first, in order, so per-vertex data and maps of the coarse
 // mesh still index the fine one (benchmarks B3/S3 and the resolution-independence check use this).
+#include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 
 #include "app/command.h"
 #include "core/error.h"
@@ -51,6 +53,9 @@ void setup(CLI::App& parent) {
     io::write_surface(a->out, fine, io::same_space_write_options(s, a->in));
     info("subdivide: " + a->out + ": " + std::to_string(fine.num_vertices()) + " vertices, " +
          std::to_string(fine.num_faces()) + " faces");
+    if (global_options().json)
+      std::cout << nlohmann::json{{"output", a->out}, {"vertices", fine.num_vertices()}, {"faces", fine.num_faces()}, {"times", a->times}}.dump(2)
+                << '\n';
   });
 }
 

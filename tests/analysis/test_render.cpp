@@ -499,6 +499,11 @@ TEST(Raster, NiceTicks) {
   EXPECT_EQ(an::format_tick(-2, step), "\u22122");  // a typeset minus
   EXPECT_EQ(an::format_tick(0.25, 0.25), "0.25");
   EXPECT_EQ(an::format_tick(1500, 500), "1500");
+  // Constant values whose means differ in their last bits: one tick (it looped until memory ran
+  // out: `authalic elements` on a constant map died with std::bad_alloc).
+  EXPECT_EQ(an::nice_ticks(1.0, 1.0 + 2.2e-16, 5, &step), (std::vector<double>{1.0}));
+  EXPECT_EQ(an::nice_ticks(-5.0, -5.0 * (1 + 1e-12), 5, &step).size(), 1u);
+  EXPECT_EQ(an::nice_ticks(0.0, 1e-20, 5, &step).size(), 6u);  // tiny but real ranges keep their ticks
 }
 
 TEST(RenderPng, RoundTripsThroughWriteAndRead) {

@@ -147,5 +147,51 @@ TEST(ElementsCliRealData, AuthalicSquareMapOfB1HasEqualAreaElementsConformalDoes
   EXPECT_NEAR(nlohmann::json::parse(out.substr(out.find('{')))["element_area_cv"].get<double>(), cv[0], 2e-3);
 }
 
+// The maps the other commands write are accepted by `elements` and measured by `metrics` with
+// the surface they were made from (each was refused or mismeasured): the sphere of `sphere`
+// (its vertex mean was 6 % off centre), the disk of `flatten --domain disk` and the rectangle of
+// `rectangle --surface` (their appended vertices are placed from the map's record); constant
+// values draw their picture (the colour bar's ticks filled memory); a map of another mesh is
+// refused by `metrics`.
+TEST(ElementsCliRealData, MapsOfTheOtherCommandsPairWithTheirSurface) {
+  AUTHALIC_REQUIRE_SHARED(white, "fsaverage5/white_left.gii.gz");
+  AUTHALIC_REQUIRE_SHARED(flat, "fsaverage5/flat_left.gii.gz");
+  const std::string dir = test::temp_dir("elements_cli_other_maps");
+  const std::string exe = test::authalic_binary();
+  const io::Surface surface = io::read_surface(white);
+  io::write_per_vertex(dir + "/ones.shape.gii", VectorXd::Ones(surface.mesh.num_vertices()));
+  std::string out;
+  auto total_area = [&](const std::string& map, const std::string& domain) {
+    EXPECT_EQ(test::run_command(exe + " elements " + white + " " + map + " " + dir + "/ones.shape.gii " + dir + "/el_" + domain +
+                                    " --domain " + domain + " --json -q",
+                                &out),
+              0)
+        << out;
+    return out.find('{') == std::string::npos ? 0.0 : nlohmann::json::parse(out.substr(out.find('{')))["total_area_mm2"].get<double>();
+  };
+  const double whole = face_areas(surface.mesh.V, surface.mesh.F).sum();
+  const double cortex = face_areas(surface.mesh.V, io::read_surface(flat).mesh.F).sum();
+
+  ASSERT_EQ(test::run_command(exe + " sphere " + white + " " + dir + "/sphere.surf.gii -q", &out), 0) << out;
+  EXPECT_NEAR(total_area(dir + "/sphere.surf.gii", "sphere"), whole, 1e-6 * whole);
+  EXPECT_TRUE(std::filesystem::exists(dir + "/el_sphere.png"));
+
+  ASSERT_EQ(test::run_command(exe + " flatten " + white + " " + dir + "/disk.surf.gii --faces-from " + flat + " --domain disk -q", &out), 0)
+      << out;
+  EXPECT_NEAR(total_area(dir + "/disk.surf.gii", "disk"), cortex, 1e-4 * cortex);  // its flipped dividing edges re-triangulate a little
+
+  ASSERT_EQ(test::run_command(exe + " rectangle " + dir + "/rect.surf.gii --surface " + white + " --metrics " + dir + "/rect.json -q", &out), 0)
+      << out;
+  EXPECT_NEAR(total_area(dir + "/rect.surf.gii", "rectangle"), whole, 1e-6 * whole);
+  ASSERT_EQ(test::run_command(exe + " metrics " + white + " " + dir + "/rect.surf.gii --domain rectangle --json", &out), 0) << out;
+  const double cv = nlohmann::json::parse(out.substr(out.find('{')))["element_cv"].get<double>();
+  const double own = nlohmann::json::parse(std::ifstream(dir + "/rect.json"))["metrics"]["element_cv"].get<double>();
+  EXPECT_NEAR(cv, own, 1e-6) << "every face measured, as the command measured its map";
+
+  const std::string other = std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/surf/lh.white";
+  EXPECT_EQ(test::run_command(exe + " metrics " + other + " " + dir + "/sphere.surf.gii --domain sphere", &out), 2) << out;
+  EXPECT_NE(out.find("it is not a map of this surface"), std::string::npos) << out;
+}
+
 }  // namespace
 }  // namespace authalic

@@ -231,6 +231,40 @@ TEST(ReliabilityCli, NumericOptionsOutsideTheirRangeAreRefused) {
   EXPECT_FALSE(fs::exists(dir + "/run"));
 }
 
+// Options and outputs of the small commands that did not do what their help says: --json printed
+// nothing (render, subdivide), an empty colour range and an unknown hemisphere were taken, and a
+// phantom written over an earlier, larger one left the earlier subjects beside it.
+TEST(ReliabilityCli, SmallCommandsDoWhatTheirHelpSays) {
+  const std::string dir = test::temp_dir("rel-small-commands");
+  const std::string patch = write_patch(dir);
+  std::string out;
+  ASSERT_EQ(test::run_command(bin() + " subdivide " + q(patch) + " " + q(dir + "/fine.surf.gii") + " --json 2>/dev/null", &out), 0) << out;
+  const auto sub = nlohmann::json::parse(out);
+  EXPECT_EQ(sub.at("vertices"), io::read_surface(dir + "/fine.surf.gii").mesh.num_vertices());
+  ASSERT_EQ(test::run_command(bin() + " flatten " + q(patch) + " " + q(dir + "/flat.surf.gii") + " --uv " + q(dir + "/uv.surf.gii") +
+                                  " --k 8 -q",
+                              &out),
+            0)
+      << out;
+  ASSERT_EQ(test::run_command(bin() + " render " + q(dir + "/r.png") + " " + q(dir + "/uv.surf.gii") + " --json 2>/dev/null", &out), 0) << out;
+  EXPECT_EQ(nlohmann::json::parse(out).at("output"), dir + "/r.png");
+  expect_refused(bin() + " render " + q(dir + "/r2.png") + " " + q(dir + "/uv.surf.gii") + " --range 2 -2", "--range: LO must be below HI", {});
+  EXPECT_FALSE(fs::exists(dir + "/r2.png"));
+  io::write_per_vertex(dir + "/v.shape.gii", io::read_surface(patch).mesh.V.col(0));
+  EXPECT_EQ(test::run_command(bin() + " elements " + q(patch) + " " + q(dir + "/uv.surf.gii") + " " + q(dir + "/v.shape.gii") + " " +
+                                  q(dir + "/el") + " --k 8 --hemisphere banana",
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("--hemisphere: banana not in {left,right,both}"), std::string::npos) << out;
+
+  ASSERT_EQ(test::run_command(bin() + " phantom " + q(dir + "/ph") + " --synthetic --controls 3 --patients 1 -q", &out), 0) << out;
+  ASSERT_EQ(test::run_command(bin() + " phantom " + q(dir + "/ph") + " --synthetic --controls 1 --patients 0 -q", &out), 0) << out;
+  EXPECT_TRUE(fs::exists(dir + "/ph/sub-control01"));
+  EXPECT_FALSE(fs::exists(dir + "/ph/sub-control02")) << "a subject of the earlier cohort stayed";
+  EXPECT_FALSE(fs::exists(dir + "/ph/sub-patient01"));
+}
+
 // ---- 6. degenerate normative references --------------------------------------------------------
 
 TEST(ReliabilityCli, DegenerateNormativeReferencesAreRefusedNotReadAsNormal) {
