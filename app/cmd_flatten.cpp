@@ -57,10 +57,13 @@ struct FlattenArgs {
   long long max_vertices = 1000000;
 };
 
-const char* kOrientationRule =
-    "faces oriented outward and the map orientation-preserving, so the lateral surface faces the viewer; the boundary "
-    "point nearest the most anterior (largest RAS y) region vertex is at the middle of the top side (x = 0.5, y = 1); "
-    "the boundary follows counter-clockwise by arc length; a right hemisphere is the mirror image of a left one";
+// The anatomical orientation rule as the outputs state it, for the square or the disk.
+std::string orientation_rule(bool disk) {
+  return std::string("faces oriented outward and the map orientation-preserving, so the lateral surface faces the viewer; the "
+                     "boundary point nearest the most anterior (largest RAS y) region vertex is at ") +
+         (disk ? "the top of the unit circle (x = 0, y = 1)" : "the middle of the top side (x = 0.5, y = 1)") +
+         "; the boundary follows counter-clockwise by arc length; a right hemisphere is the mirror image of a left one";
+}
 
 // The cortex region's faces on SURFACE's vertices, from whichever option was given. A label
 // (vertices) is cleaned up into one disk (core/region.h); *cleanup says what was changed.
@@ -312,7 +315,7 @@ double write_flat_surfaces(const FlattenArgs& a, const io::Surface& surface, con
   wo.metadata = {{"authalic_map", disk ? "disk (authalic: the square map carried by Shirley & Chiu's concentric map, then a "
                                          "per-face polish with the boundary sliding on the circle)"
                                        : "square (authalic, Lie advection / Moser flow)"},
-                 {"authalic_orientation", kOrientationRule},
+                 {"authalic_orientation", orientation_rule(disk)},
                  {"authalic_source", a.surface},
                  {"authalic_region", region_source},
                  {"authalic_input_vertices", std::to_string(r.num_input_vertices)},
@@ -374,7 +377,7 @@ nlohmann::json flatten_json(const FlattenArgs& a, const SquareMapResult& r, cons
                       {"faces", r.F.rows()},
                       {"cortical_area_mm2", r.surface_area},
                       {"flat_scale_mm_per_unit", scale},
-                      {"orientation_rule", kOrientationRule},
+                      {"orientation_rule", orientation_rule(a.domain == "disk")},
                       {"faces_reversed_to_point_outward", r.faces_reversed},
                       {"anterior_vertex", r.anterior_vertex},
                       {"initial_map",
