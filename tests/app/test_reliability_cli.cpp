@@ -238,16 +238,18 @@ TEST(ReliabilityCli, SmallCommandsDoWhatTheirHelpSays) {
   const std::string dir = test::temp_dir("rel-small-commands");
   const std::string patch = write_patch(dir);
   std::string out;
-  ASSERT_EQ(test::run_command(bin() + " subdivide " + q(patch) + " " + q(dir + "/fine.surf.gii") + " --json 2>/dev/null", &out), 0) << out;
-  const auto sub = nlohmann::json::parse(out);
+  ASSERT_EQ(test::run_command(bin() + " subdivide " + q(patch) + " " + q(dir + "/fine.surf.gii") + " --json", &out), 0) << out;
+  ASSERT_NE(out.find('{'), std::string::npos) << out;
+  const auto sub = nlohmann::json::parse(out.substr(out.find('{')));
   EXPECT_EQ(sub.at("vertices"), io::read_surface(dir + "/fine.surf.gii").mesh.num_vertices());
   ASSERT_EQ(test::run_command(bin() + " flatten " + q(patch) + " " + q(dir + "/flat.surf.gii") + " --uv " + q(dir + "/uv.surf.gii") +
                                   " --k 8 -q",
                               &out),
             0)
       << out;
-  ASSERT_EQ(test::run_command(bin() + " render " + q(dir + "/r.png") + " " + q(dir + "/uv.surf.gii") + " --json 2>/dev/null", &out), 0) << out;
-  EXPECT_EQ(nlohmann::json::parse(out).at("output"), dir + "/r.png");
+  ASSERT_EQ(test::run_command(bin() + " render " + q(dir + "/r.png") + " " + q(dir + "/uv.surf.gii") + " --json", &out), 0) << out;
+  ASSERT_NE(out.find('{'), std::string::npos) << out;
+  EXPECT_EQ(nlohmann::json::parse(out.substr(out.find('{'))).at("output"), dir + "/r.png");
   expect_refused(bin() + " render " + q(dir + "/r2.png") + " " + q(dir + "/uv.surf.gii") + " --range 2 -2", "--range: LO must be below HI", {});
   EXPECT_FALSE(fs::exists(dir + "/r2.png"));
   io::write_per_vertex(dir + "/v.shape.gii", io::read_surface(patch).mesh.V.col(0));
