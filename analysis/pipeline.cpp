@@ -788,8 +788,6 @@ Normalisation subject_normalisation(const Hemisphere (&hemis)[2], const SubjectI
   return norm;
 }
 
-// Step 3. PET by normal projection from the pial surface inward (Zou et al. 2011, section 5.2),
-// then normalised. Sets `registration` for the report's quality flags.
 // The PET's coverage of one hemisphere's cortex (its vertices on the pial surface, Vw in the
 // PET's world): counted into h, and a warning (log, --json, report) when part of it has no value.
 void note_cortex_coverage(Hemisphere& h, const io::Volume& pet, const MatrixXd& Vw, RunSummary& summary) {
@@ -817,6 +815,8 @@ void note_cortex_coverage(Hemisphere& h, const io::Volume& pet, const MatrixXd& 
   summary.warnings.push_back(w.str());
 }
 
+// Step 3. PET by normal projection from the pial surface inward (Zou et al. 2011, section 5.2),
+// then normalised. Sets `registration` for the report's quality flags.
 Normalisation sample_and_normalise(Hemisphere (&hemis)[2], const SubjectInputs& in, const RunOptions& options,
                                    const LoadedInputs& inputs, StepLog& log, RunSummary& summary, std::string& registration) {
   log.begin("PET sampling");
