@@ -188,8 +188,9 @@ std::string hemisphere_of(const std::map<std::string, std::string>& metadata, co
   std::string name = path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
   for (char& ch : name) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
   auto has = [&](const char* s) { return name.find(s) != std::string::npos; };
-  if (name.rfind("lh.", 0) == 0 || has("hemi-l") || has("left")) return "left";
-  if (name.rfind("rh.", 0) == 0 || has("hemi-r") || has("right")) return "right";
+  // FreeSurfer's lh./rh., also as lh_/rh_ (and nilearn's white_left), BIDS hemi-L/R.
+  if (name.rfind("lh.", 0) == 0 || name.rfind("lh_", 0) == 0 || has("hemi-l") || has("left")) return "left";
+  if (name.rfind("rh.", 0) == 0 || name.rfind("rh_", 0) == 0 || has("hemi-r") || has("right")) return "right";
   return "unknown";
 }
 

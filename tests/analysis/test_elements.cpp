@@ -47,6 +47,18 @@ MatrixXd warp(const MatrixXd& UV) {
 
 double f3(const Eigen::Vector3d& p) { return 5.0 + 0.3 * p.x() - 0.2 * p.y() + 0.7 * p.z(); }
 
+// The hemisphere of a table: the GIFTI structure, else the file's name as FreeSurfer, BIDS or
+// nilearn write it (rh_white.surf.gii was "unknown" while `sphere` said right).
+TEST(Elements, HemisphereFromTheSurfacesMetadataOrName) {
+  EXPECT_EQ(hemisphere_of({{"AnatomicalStructurePrimary", "CortexRight"}}, "/d/lh.white"), "right");
+  EXPECT_EQ(hemisphere_of({}, "/d/lh.white"), "left");
+  EXPECT_EQ(hemisphere_of({}, "/d/rh_white.surf.gii"), "right");
+  EXPECT_EQ(hemisphere_of({}, "/d/lh_pial.gii"), "left");
+  EXPECT_EQ(hemisphere_of({}, "/d/sub-01_hemi-R_white.surf.gii"), "right");
+  EXPECT_EQ(hemisphere_of({}, "/d/white_left.gii.gz"), "left");
+  EXPECT_EQ(hemisphere_of({}, "/d/cortex.surf.gii"), "unknown");
+}
+
 TEST(Elements, ValueOfLinearFieldIsItsValueAtTheElementCentroid) {
   const TriMesh square = grid_square(41);
   const MatrixXd V = warp(square.V);
