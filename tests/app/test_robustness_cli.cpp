@@ -359,6 +359,18 @@ TEST(RobustnessCli, RunWarnsWhenThePetMissesPartOfTheCortex) {
   const std::string log_text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
   EXPECT_NE(log_text.find("warning: " + warning), std::string::npos) << log_text;
   EXPECT_EQ(log_text.find("warning: " + warning), log_text.rfind("warning: " + warning)) << "logged once";
+  // A PET that misses the surface is refused; the remedy named is run's own (--t1), not sample's
+  // --surface-to-volume, which run does not have.
+  pet.vox2ras(0, 3) += 200.0;
+  io::write_nifti(dir + "/far.nii.gz", pet);
+  std::string far = run_args(dir + "/far_out");
+  far.replace(far.find(q(s + "sub-patient01/sub-patient01_pet.nii.gz")), q(s + "sub-patient01/sub-patient01_pet.nii.gz").size(), q(dir + "/far.nii.gz"));
+  EXPECT_EQ(test::run_command(far, &out), 2) << out;
+  EXPECT_NE(out.find("--t1 registers the PET to the subject's T1"), std::string::npos) << out;
+  EXPECT_EQ(out.find("--surface-to-volume"), std::string::npos) << out;
+  // A reference that is not there says so.
+  EXPECT_EQ(test::run_command(run_args(dir + "/noref") + " --normative " + q(dir + "/missing.json"), &out), 2) << out;
+  EXPECT_NE(out.find("missing.json: cannot read the normative reference (no such file)"), std::string::npos) << out;
 }
 
 // Every sidecar of a spatial file states its units and space as keys (they were only in the
