@@ -34,11 +34,8 @@ CortexRegion read_cortex_region(const TriMesh& white, const std::string& white_p
   if (c.F.rows() == 0)
     throw InputError(cortex_path + ": the label's " + std::to_string(file.vertices.size()) + " vertices contain no whole triangle of " +
                      white_path + "; check that the label belongs to this surface");
-  if (!c.is_disk()) {
-    // A damaged surface shows in the region as holes and loops: say what is wrong with it instead.
-    const std::string damage = surface_problem_for_regions(analyze_topology(white.V, white.F));
-    if (!damage.empty()) throw InputError(white_path + ": " + damage);
-  }
+  // A damaged surface shows in the region as holes and loops: say what is wrong with it instead.
+  if (!c.surface_damage.empty()) throw InputError(white_path + ": " + c.surface_damage);
   if (!c.is_disk())
     throw InputError(cortex_path + " on " + white_path + ": " + c.problem() +
                      "; the map needs a region with one boundary loop, e.g. FreeSurfer's ?h.cortex.label");

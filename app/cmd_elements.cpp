@@ -116,11 +116,12 @@ int run_elements(const ElementsArgs& a) {
   const bool placed = inserted > 0 && record != map.metadata.end();
   MatrixXd V3 = surface.mesh.V;
   VectorXd vertex_values = values;
-  if (placed) {
-    V3 = place_inserted_vertices(surface.mesh.V, record->second, inserted, a.map);
-    MatrixXd columns = MatrixXd::Zero(nv, 3);
-    columns.col(0) = values;
-    vertex_values = place_inserted_vertices(columns, record->second, inserted, a.map).col(0);  // linear, as the map's positions
+  if (placed) {  // positions and values by the same linear rule, the record read once
+    MatrixXd columns(nv, 4);
+    columns << surface.mesh.V.leftCols(3), values;
+    const MatrixXd all = place_inserted_vertices(columns, record->second, inserted, a.map);
+    V3 = all.leftCols(3);
+    vertex_values = all.col(3);
   }
   analysis::ElementMap em =
       analysis::prepare_element_map(V3,

@@ -87,11 +87,8 @@ MatrixXi region_faces(const FlattenArgs& a, const io::Surface& surface, std::str
     if (c->F.rows() == 0)
       throw InputError(a.label + ": the label's " + std::to_string(verts.size()) +
                        " vertices contain no whole triangle of the surface; check that the label belongs to " + a.surface);
-    if (!c->is_disk()) {
-      // A damaged surface shows in the region as holes and loops: say what is wrong with it instead.
-      const std::string damage = surface_problem_for_regions(analyze_topology(mesh.V, mesh.F));
-      if (!damage.empty()) throw InputError(a.surface + ": " + damage);
-    }
+    // A damaged surface shows in the region as holes and loops: say what is wrong with it instead.
+    if (!c->surface_damage.empty()) throw InputError(a.surface + ": " + c->surface_damage);
     if (!c->is_disk())
       throw InputError(a.label + " on " + a.surface + ": " + c->problem() +
                        "; the square map needs one disk: check that the label is this surface's cortex with the medial "

@@ -100,7 +100,7 @@ MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int
   if (k != count)
     throw InputError(path + ": metadata " + kInsertedVerticesKey + " describes " + std::to_string(k) + " inserted vertices but the map has " +
                      std::to_string(count) + "; the file was changed after authalic wrote it");
-  return extend_to_inserted(V.leftCols(3), parents, weight);  // the flattening's own rule
+  return extend_to_inserted(V, parents, weight);  // the flattening's own rule
 }
 
 nlohmann::json flow_json(const FlowReport& r, const FlowOptions& o) {

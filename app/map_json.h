@@ -38,8 +38,8 @@ bool is_left_hemisphere(const std::map<std::string, std::string>& metadata, cons
 // measures every face of the map, as flatten does.
 inline constexpr const char* kInsertedVerticesKey = "authalic_inserted_vertices";
 std::string inserted_vertices_text(const MatrixXi& parents, const VectorXd& weight);
-// The surface positions V (num_input rows) extended by the inserted vertices described by
-// `text`; `count` of them are expected. Throws InputError naming `path` for text that does not
+// The surface positions V (num_input rows; any columns, e.g. positions and values side by side)
+// extended by the inserted vertices described by `text`; `count` of them are expected. Throws InputError naming `path` for text that does not
 // describe them (wrong count, a parent not yet defined, a weight outside [0, 1]).
 MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int count, const std::string& path);
 

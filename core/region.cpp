@@ -250,6 +250,26 @@ void measure_unfilled_holes(const Surface& s, const std::vector<char>& mask, con
 
 }  // namespace
 
+namespace {
+
+// Empty when a region can be cut from the surface by its vertices: every edge in at most two
+// triangles, the triangles consistently oriented and none repeated; otherwise what is wrong.
+std::string surface_problem_for_regions(const TopologyReport& t) {
+  std::vector<std::string> damage;
+  if (t.non_manifold_edges > 0)
+    damage.push_back(plural(t.non_manifold_edges, "edge is", "edges are") + " shared by more than two triangles (non-manifold)");
+  if (t.inconsistent_orientation_edges > 0)
+    damage.push_back(plural(t.inconsistent_orientation_edges, "edge is", "edges are") +
+                     " traversed the same way by both its triangles (inconsistent orientation)");
+  if (t.duplicate_faces > 0) damage.push_back(plural(t.duplicate_faces, "triangle is", "triangles are") + " repeated");
+  if (damage.empty()) return {};
+  std::string s = "the surface is not a clean triangle mesh: ";
+  for (std::size_t i = 0; i < damage.size(); ++i) s += (i ? "; " : "") + damage[i];
+  return s + "; repair it (orient its faces consistently, remove repeated and dangling triangles) before cutting a region from it";
+}
+
+}  // namespace
+
 RegionCleanup region_faces_from_vertices(const MatrixXd& V, const MatrixXi& F, const std::vector<bool>& in_region,
                                          const RegionCleanupOptions& opt) {
   if (static_cast<Eigen::Index>(in_region.size()) != V.rows())
@@ -367,21 +387,8 @@ RegionCleanup region_faces_from_vertices(const MatrixXd& V, const MatrixXi& F, c
       if (raw_pinch[v] && !pinch[v]) ++r.pinch_vertices_fixed;
   }
   if (count > 0) measure_unfilled_holes(s, mask, used, r);
+  if (!r.is_disk()) r.surface_damage = surface_problem_for_regions(analyze_topology(V, F));
   return r;
-}
-
-std::string surface_problem_for_regions(const TopologyReport& t) {
-  std::vector<std::string> damage;
-  if (t.non_manifold_edges > 0)
-    damage.push_back(plural(t.non_manifold_edges, "edge is", "edges are") + " shared by more than two triangles (non-manifold)");
-  if (t.inconsistent_orientation_edges > 0)
-    damage.push_back(plural(t.inconsistent_orientation_edges, "edge is", "edges are") +
-                     " traversed the same way by both its triangles (inconsistent orientation)");
-  if (t.duplicate_faces > 0) damage.push_back(plural(t.duplicate_faces, "triangle is", "triangles are") + " repeated");
-  if (damage.empty()) return {};
-  std::string s = "the surface is not a clean triangle mesh: ";
-  for (std::size_t i = 0; i < damage.size(); ++i) s += (i ? "; " : "") + damage[i];
-  return s + "; repair it (orient its faces consistently, remove repeated and dangling triangles) before cutting a region from it";
 }
 
 std::string RegionCleanup::summary() const {

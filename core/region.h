@@ -83,6 +83,10 @@ struct RegionCleanup {
   // reported too large is at least max_hole_fraction of it.
   double largest_unfilled_hole_fraction = 0;
   double fill_rule_area_mm2 = 0;
+  // When the result is not one disk: what is wrong with the surface itself (non-manifold,
+  // inconsistently oriented or repeated triangles), which the region would show as holes and
+  // loops; "" when the surface is clean. Measured only on failure.
+  std::string surface_damage;
 
   bool is_disk() const { return F.rows() > 0 && topology.is_disk() && topology.is_oriented(); }
   bool changed() const { return islands_dropped + holes_filled + pinch_faces_removed > 0; }
@@ -99,9 +103,5 @@ struct RegionCleanup {
 RegionCleanup region_faces_from_vertices(const MatrixXd& V, const MatrixXi& F, const std::vector<bool>& in_region,
                                          const RegionCleanupOptions& opt = {});
 
-// Empty when a region can be cut from the surface (V, F) by its vertices: every edge in at most two
-// triangles, the triangles consistently oriented and none repeated. Otherwise what is wrong, for
-// an InputError: the cleanup would report the damage as holes and boundary loops of the region.
-std::string surface_problem_for_regions(const TopologyReport& surface);
 
 }  // namespace authalic
