@@ -90,6 +90,18 @@ MatrixXi faces_in_map_region(const MatrixXi& F, const MatrixXi& map_F, int num_v
   return out;
 }
 
+// One hemisphere's part of a two-hemisphere rectangle (`rectangle --lh/--rh` writes one file per
+// part) fills only the columns on its side of the seam, and the cells across the seam hold both
+// hemispheres: its elements would be half empty (area CV near 1) and recorded as "both".
+void require_whole_domain(const analysis::ElementMap& em, const Domain& domain, const std::string& map_path) {
+  if (domain.kind != DomainKind::Rectangle || em.D.rows() == 0) return;
+  const double lo = em.D.col(0).minCoeff(), hi = em.D.col(0).maxCoeff();
+  if (hi - lo > 1.9) return;
+  throw InputError(map_path + ": the map covers x in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                   "] of the 2:1 rectangle [0, 2], one hemisphere's part; the rectangle's elements need both hemispheres (`authalic run` "
+                   "makes them), or give this hemisphere's square map (`authalic flatten`) with --domain square");
+}
+
 int run_elements(const ElementsArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   io::check_file_roles({a.surface, a.map, a.values}, analysis::element_output_paths(a.prefix).all());
@@ -129,6 +141,7 @@ int run_elements(const ElementsArgs& a) {
                                     : inserted > 0  ? faces_in_map_region(surface.mesh.F, map.mesh.F, nv)  // appended vertices to trace
                                                     : surface.mesh.F,
                                     map.mesh.V, map.mesh.F, vertex_values, domain, a.map);
+  require_whole_domain(em, domain, a.map);
   if (placed) {  // the per-vertex outputs pair with the surface: its vertices only
     em.num_surface_vertices = nv;
     em.inserted_vertices = inserted;

@@ -35,6 +35,39 @@ struct RenderArgs {
   std::string title;
 };
 
+// The bounding box of the map's triangles' corners (x, y, z).
+struct MapExtent {
+  Eigen::Vector3d lo, hi;
+};
+MapExtent map_extent(const MatrixXd& V, const MatrixXi& F) {
+  MapExtent e{Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()),
+              Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity())};
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d p = V.row(F(f, k)).head<3>().transpose();
+      e.lo = e.lo.cwiseMin(p);
+      e.hi = e.hi.cwiseMax(p);
+    }
+  return e;
+}
+
+// A picture of a 3D surface, or of a map in mm drawn on the unit square, would be a blank or
+// cropped image given as success: refuse both, saying which option draws the file.
+void require_drawable(const MapExtent& e, const std::string& domain, double domain_width, const std::string& path) {
+  auto span = [](double lo, double hi) { return "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]"; };
+  const double xy = std::max(e.hi.x() - e.lo.x(), e.hi.y() - e.lo.y());
+  if (e.hi.z() - e.lo.z() > 1e-3 * xy)
+    throw InputError(path + ": not a flat map (z spans " + span(e.lo.z(), e.hi.z()) +
+                     "); render draws flat maps, e.g. `authalic flatten --uv` or its mm-scaled flat surface (--domain fit)");
+  if (domain == "fit") return;
+  const double tolerance = 1e-3 * domain_width;
+  if (e.lo.x() < -tolerance || e.lo.y() < -tolerance || e.hi.x() > domain_width + tolerance || e.hi.y() > 1.0 + tolerance)
+    throw InputError(path + ": the map's x, y span " + span(e.lo.x(), e.hi.x()) + " x " + span(e.lo.y(), e.hi.y()) +
+                     ", outside the " + domain + (domain == "square" ? " [0,1]^2" : " [0,2] x [0,1]") +
+                     "; for a flat surface in mm or a FreeSurfer flat patch use --domain fit" +
+                     (domain == "square" && e.hi.x() <= 2.0 + tolerance && e.lo.x() >= -tolerance ? ", for a 2:1 rectangle map --domain rectangle" : ""));
+}
+
 void setup(CLI::App& parent) {
   auto a = std::make_shared<RenderArgs>();
   CLI::App* sub = parent.add_subcommand(
@@ -104,15 +137,10 @@ void setup(CLI::App& parent) {
       analysis::FlatRenderOptions o;
       o.width = a->width;
       o.domain_width = a->domain == "rectangle" ? 2.0 : 1.0;
+      const MapExtent e = map_extent(map.mesh.V, map.mesh.F);
+      require_drawable(e, a->domain, o.domain_width, path);
       if (a->domain == "fit") {
-        Eigen::Vector2d lo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()), hi = -lo;
-        for (int f = 0; f < map.mesh.num_faces(); ++f) {
-          for (int k = 0; k < 3; ++k) {
-            const Eigen::Vector2d p = map.mesh.V.row(map.mesh.F(f, k)).head<2>().transpose();
-            lo = lo.cwiseMin(p);
-            hi = hi.cwiseMax(p);
-          }
-        }
+        const Eigen::Vector2d lo = e.lo.head<2>(), hi = e.hi.head<2>();
         o.x0 = lo.x();
         o.y0 = lo.y();
         o.domain_width = std::max(hi.x() - lo.x(), 1e-9);

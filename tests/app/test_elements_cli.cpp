@@ -180,6 +180,21 @@ TEST(ElementsCliRealData, MapsOfTheOtherCommandsPairWithTheirSurface) {
       << out;
   EXPECT_NEAR(total_area(dir + "/disk.surf.gii", "disk"), cortex, 1e-4 * cortex);  // its flipped dividing edges re-triangulate a little
 
+  // One hemisphere's part of a two-hemisphere rectangle (here a square map, the left part when the
+  // hemispheres' areas are equal) fills half the 2K x K cells: refused, not an area CV near 1.
+  ASSERT_EQ(test::run_command(exe + " flatten " + white + " " + dir + "/sq.surf.gii --faces-from " + flat + " --uv " + dir +
+                                  "/part.surf.gii -q",
+                              &out),
+            0)
+      << out;
+  EXPECT_EQ(test::run_command(exe + " elements " + white + " " + dir + "/part.surf.gii " + dir + "/ones.shape.gii " + dir +
+                                  "/el_part --domain rectangle",
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("one hemisphere's part; the rectangle's elements need both hemispheres"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/el_part.tsv"));
+
   ASSERT_EQ(test::run_command(exe + " rectangle " + dir + "/rect.surf.gii --surface " + white + " --metrics " + dir + "/rect.json -q", &out), 0)
       << out;
   EXPECT_NEAR(total_area(dir + "/rect.surf.gii", "rectangle"), whole, 1e-6 * whole);

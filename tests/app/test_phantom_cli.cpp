@@ -7,6 +7,7 @@
 
 #include "common/test_data.h"
 #include "io/image_io.h"
+#include "io/surface_io.h"
 
 namespace {
 
@@ -50,32 +51,48 @@ TEST(PhantomCli, BadArgumentsAreInputErrors) {
 
 TEST(RenderCli, DrawsFlatMapsSideBySide) {
   const std::string dir = authalic::test::temp_dir("render_cli");
-  // The synthetic white surface seen from the side as a "map" is enough to exercise the command.
+  // The synthetic white surface seen from above (z dropped) is a flat "map" in mm, enough to
+  // exercise the command; scaled into [0,1]^2 it is a map on the square.
   std::string output;
   ASSERT_EQ(run_command(authalic_binary() + " phantom " + dir + "/c --synthetic --controls 1 --patients 0 --voxel-size 6 -q", &output),
             0)
       << output;
+  authalic::TriMesh flat = authalic::io::read_surface(dir + "/c/surf/lh.white").mesh;
+  flat.V.col(2).setZero();
+  const std::string mm = dir + "/flat_mm.surf.gii", uv = dir + "/flat_uv.surf.gii";
+  authalic::io::write_surface(mm, flat);
+  const Eigen::RowVector3d lo = flat.V.colwise().minCoeff(), hi = flat.V.colwise().maxCoeff();
+  const double size = (hi - lo).head<2>().maxCoeff();
+  for (Eigen::Index i = 0; i < flat.V.rows(); ++i) flat.V.row(i).head<2>() = (flat.V.row(i).head<2>() - lo.head<2>()) / size;
+  authalic::io::write_surface(uv, flat);
   const std::string png = dir + "/maps.png";
-  ASSERT_EQ(run_command(authalic_binary() + " render " + png + " " + dir + "/c/surf/lh.white " + dir +
-                            "/c/surf/lh.pial --grid 4 --caption one --caption two --width 300 -q",
+  ASSERT_EQ(run_command(authalic_binary() + " render " + png + " " + uv + " " + uv + " --grid 4 --caption one --caption two --width 300 -q",
                         &output),
             0)
       << output;
   const authalic::io::RgbImage img = authalic::io::read_png(png);
   EXPECT_GT(img.width, 2 * 300);
-  // --domain fit frames a map in mm (here the surface's x,y): its plain gray fill covers much of the picture.
+  // --domain fit frames a map in mm: its plain gray fill covers much of the picture.
   const std::string fit = dir + "/fit.png";
-  ASSERT_EQ(run_command(authalic_binary() + " render " + fit + " " + dir + "/c/surf/lh.white --domain fit --width 300 -q", &output), 0)
-      << output;
+  ASSERT_EQ(run_command(authalic_binary() + " render " + fit + " " + mm + " --domain fit --width 300 -q", &output), 0) << output;
   const authalic::io::RgbImage fitted = authalic::io::read_png(fit);
   long gray = 0;
   for (int y = 0; y < fitted.height; ++y) {
     for (int x = 0; x < fitted.width; ++x) gray += fitted.pixel(x, y)[0] == 210 && fitted.pixel(x, y)[2] == 210;
   }
   EXPECT_GT(gray, fitted.width * fitted.height / 3);
-  EXPECT_EQ(run_command(authalic_binary() + " render " + png + " /nonexistent.gii", &output), 2) << output;
-  EXPECT_EQ(run_command(authalic_binary() + " render " + png + " " + dir + "/c/surf/lh.white --colormap jet", &output), 2)
+  // A map in mm drawn on the unit square, or a 3D surface, would be a blank or cropped picture:
+  // both are refused, naming the option that draws them.
+  const std::string refused = dir + "/refused.png";
+  EXPECT_EQ(run_command(authalic_binary() + " render " + refused + " " + mm, &output), 2) << output;
+  EXPECT_NE(output.find("outside the square [0,1]^2; for a flat surface in mm or a FreeSurfer flat patch use --domain fit"),
+            std::string::npos)
       << output;
+  EXPECT_EQ(run_command(authalic_binary() + " render " + refused + " " + dir + "/c/surf/lh.white --domain fit", &output), 2) << output;
+  EXPECT_NE(output.find("not a flat map (z spans"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists(refused));
+  EXPECT_EQ(run_command(authalic_binary() + " render " + png + " /nonexistent.gii", &output), 2) << output;
+  EXPECT_EQ(run_command(authalic_binary() + " render " + png + " " + uv + " --colormap jet", &output), 2) << output;
   EXPECT_NE(output.find("jet"), std::string::npos) << output;
 }
 
