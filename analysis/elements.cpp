@@ -601,9 +601,13 @@ void write_element_nifti(const std::string& path, const std::vector<float>& data
 }
 
 double mean_element_area(const ElementBlock& block) {
+  // Over the elements that hold cortex: one hemisphere's part of a two-hemisphere rectangle
+  // leaves the other part's cells empty.
   double sum = 0;
-  for (const auto& e : block.elements) sum += e.area_mm2;
-  return block.elements.empty() ? std::nan("") : sum / static_cast<double>(block.elements.size());
+  int n = 0;
+  for (const auto& e : block.elements)
+    if (e.area_mm2 > 0) sum += e.area_mm2, ++n;
+  return n == 0 ? std::nan("") : sum / n;
 }
 
 std::vector<float> element_image(const ElementBlock& block, const ElementGrid& grid, bool areas) {
@@ -617,7 +621,8 @@ double mean_element_area(const ElementTable& table) {
   double sum = 0;
   int n = 0;
   for (const auto& b : table.blocks)
-    for (const auto& e : b.elements) sum += e.area_mm2, ++n;
+    for (const auto& e : b.elements)
+      if (e.area_mm2 > 0) sum += e.area_mm2, ++n;
   return n > 0 ? sum / n : std::nan("");
 }
 

@@ -156,7 +156,8 @@ ElementOutputPaths write_element_outputs(const std::string& prefix, const Elemen
 enum class ElementImageKind { kValues, kAreas, kZScore };
 void write_element_nifti(const std::string& path, const std::vector<float>& data, const ElementGrid& grid, int blocks,
                          double element_area_mm2, ElementImageKind kind, const std::string& description);
-// Mean element area (mm^2) of a block, or over a table's blocks: the cortical area per element.
+// Mean element area (mm^2) of a block, or over a table's blocks: the cortical area per element
+// (over the elements that hold cortex).
 double mean_element_area(const ElementBlock& block);
 double mean_element_area(const ElementTable& table);
 // One block's element values (value, or area_mm2 with areas = true) as the data of a cols x rows

@@ -91,15 +91,35 @@ MatrixXi faces_in_map_region(const MatrixXi& F, const MatrixXi& map_F, int num_v
 }
 
 // One hemisphere's part of a two-hemisphere rectangle (`rectangle --lh/--rh` writes one file per
-// part) fills only the columns on its side of the seam, and the cells across the seam hold both
-// hemispheres: its elements would be half empty (area CV near 1) and recorded as "both".
-void require_whole_domain(const analysis::ElementMap& em, const Domain& domain, const std::string& map_path) {
-  if (domain.kind != DomainKind::Rectangle || em.D.rows() == 0) return;
+// part; issue 19): it fills the cells on its side of the seam, and the others stay empty. Its
+// area CV is that of the cells wholly on its side (over all cells it would be near 1).
+struct RectanglePartCells {
+  bool is_part = false;
+  bool right = false;
+  int col_begin = 0, col_end = 0;  // the cells wholly inside the part: columns [begin, end)
+};
+RectanglePartCells rectangle_part_cells(const analysis::ElementMap& em, const analysis::ElementGrid& grid) {
+  RectanglePartCells p;
+  if (grid.domain.kind != DomainKind::Rectangle || em.D.rows() == 0) return p;
   const double lo = em.D.col(0).minCoeff(), hi = em.D.col(0).maxCoeff();
-  if (hi - lo > 1.9) return;
-  throw InputError(map_path + ": the map covers x in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                   "] of the 2:1 rectangle [0, 2], one hemisphere's part; the rectangle's elements need both hemispheres (`authalic run` "
-                   "makes them), or give this hemisphere's square map (`authalic flatten`) with --domain square");
+  if (hi - lo > 1.9) return p;
+  const double seam = std::isfinite(grid.domain.seam_x) ? grid.domain.seam_x : 1.0, K = grid.k;
+  p.is_part = true;
+  p.right = 0.5 * (lo + hi) > seam;
+  p.col_begin = p.right ? static_cast<int>(std::ceil(seam * K - 1e-9)) : 0;
+  p.col_end = p.right ? grid.cols : static_cast<int>(std::floor(seam * K + 1e-9));
+  return p;
+}
+
+double area_cv_of_columns(const analysis::ElementBlock& block, int col_begin, int col_end) {
+  std::vector<double> areas;
+  for (const auto& e : block.elements)
+    if (e.col >= col_begin && e.col < col_end) areas.push_back(e.area_mm2);
+  if (areas.empty()) return std::nan("");
+  double mean = 0, sum2 = 0;
+  for (double x : areas) mean += x / static_cast<double>(areas.size());
+  for (double x : areas) sum2 += (x - mean) * (x - mean);
+  return mean > 0 ? std::sqrt(sum2 / static_cast<double>(areas.size())) / mean : 0.0;
 }
 
 int run_elements(const ElementsArgs& a) {
@@ -141,21 +161,28 @@ int run_elements(const ElementsArgs& a) {
                                     : inserted > 0  ? faces_in_map_region(surface.mesh.F, map.mesh.F, nv)  // appended vertices to trace
                                                     : surface.mesh.F,
                                     map.mesh.V, map.mesh.F, vertex_values, domain, a.map);
-  require_whole_domain(em, domain, a.map);
   if (placed) {  // the per-vertex outputs pair with the surface: its vertices only
     em.num_surface_vertices = nv;
     em.inserted_vertices = inserted;
     em.notes.push_back(std::to_string(inserted) + " vertices appended by the flattening were placed from the map's " +
                        kInsertedVerticesKey + " record");
   }
-  const analysis::ElementResult result = analysis::compute_elements(em, grid, surface.to_scanner);
+  analysis::ElementResult result = analysis::compute_elements(em, grid, surface.to_scanner);
+  const RectanglePartCells part = rectangle_part_cells(em, grid);
+  if (part.is_part) {
+    result.area_cv = area_cv_of_columns(result.block, part.col_begin, part.col_end);
+    em.notes.push_back(std::string("the map is the ") + (part.right ? "right" : "left") +
+                       " hemisphere's part of a two-hemisphere rectangle: only the cells on its side of the seam hold cortex (area CV over the " +
+                       std::to_string(part.col_end - part.col_begin) + " columns wholly on its side)");
+  }
   const double compute_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - compute_start).count();
   const double compute_cpu_seconds = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;  // all threads
 
   analysis::ElementTable table;
   table.grid = grid;
   std::string hemisphere = a.hemisphere.empty() ? analysis::hemisphere_of(surface.metadata, a.surface) : a.hemisphere;
-  if (domain.kind == DomainKind::Rectangle && a.hemisphere.empty()) hemisphere = "both";
+  if (domain.kind == DomainKind::Rectangle && a.hemisphere.empty())
+    hemisphere = !part.is_part ? "both" : hemisphere == "left" || hemisphere == "right" ? hemisphere : part.right ? "right" : "left";
   table.blocks.push_back({hemisphere, result.block.elements});
   auto from_meta = [&](const std::string& key, const std::string& fallback) {
     const auto it = meta.find(key);

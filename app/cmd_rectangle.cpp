@@ -319,8 +319,9 @@ void run_one_surface(const RectangleArgs& a) {
                       {"cut_to", r.cut_path.back()},
                       {"cut_path_vertices", r.cut_path.size()},
                       {"layout", "anterior cut vertex at (0, 0.5), posterior at (2, 0.5)"},
-                      {"initial_map", r.initial_used == RectangleInitial::Sphere ? "harmonic map of the cut authalic sphere image"
-                                                                                  : "harmonic map of the cut surface"},
+                      {"initial_map", r.initial_used == RectangleInitial::Sphere
+                                          ? "harmonic map of the cut authalic sphere image"
+                                          : "conformal map of the cut surface, then the stretch-energy start"},
                       {"initial_attempts", r.attempts},
                       {"sphere_flips", r.sphere_flips},
                       {"part", part_json(r.map)}};
@@ -413,8 +414,9 @@ void setup(CLI::App& parent) {
                 "--surface form: also write the 3D surface cut open, on the map's vertices (<stem>.cut.surf.gii)")
       ->needs(surface);
   sub->add_option("--initial", a->initial,
-                  "--surface form: embedding of the initial harmonic map: surface (the cut surface itself), sphere (its "
-                  "authalic sphere image), auto (surface, then sphere if the flow leaves flips; see docs/maps.md)")
+                  "--surface form: the initial map: surface (the cut surface's conformal map and stretch-energy start, as "
+                  "flatten does), sphere (the harmonic map on its authalic sphere image), auto (surface, then sphere if the "
+                  "first fails; see docs/maps.md)")
       ->check(CLI::IsMember({"auto", "surface", "sphere"}))
       ->capture_default_str()
       ->needs(surface);

@@ -45,6 +45,14 @@ for s in white pial; do
   $py "$evalmap" "$data/lh.$s.surf.gii" "$work/S-$s.sphere.surf.gii" --domain sphere --json >"$work/S-$s.eval.json" 2>/dev/null ||
     echo '{}' >"$work/S-$s.eval.json"
 done
+# The one-surface 2:1 rectangle: the closed white hemisphere cut open along its inferior-medial path.
+set +e
+/usr/bin/time -v "$bin" rectangle "$work/W.rect.surf.gii" --surface "$data/lh.white.surf.gii" --metrics "$work/W.json" --keep-failed -q \
+  2>"$work/W.time"
+echo $? >"$work/W.code"
+set -e
+$py "$evalmap" "$data/lh.white.surf.gii" "$work/W.rect.surf.gii" --domain rect --inserted auto --json >"$work/W.eval.json" 2>/dev/null ||
+  echo '{}' >"$work/W.eval.json"
 for n in R1-white R1-pial R2-white R2-pial; do
   surf="$data/lh.${n#*-}.surf.gii"
   if [ -f "$work/$n.uv.surf.gii" ]; then
@@ -127,6 +135,18 @@ for s in ["white", "pial"]:
           f"{e.get('flips', 'nan')} | {e.get('element_area_cv', float('nan')):.5f} | {e.get('ln_area_ratio_abs_mean', float('nan')):.4f} |")
     reqs += [(f"sphere {s} exit code", code, 0), (f"sphere {s} flips", flips, 0), (f"sphere {s} evalmap flips", e.get("flips", 1e9), 0),
              (f"sphere {s} element CV", cv, 0.005), (f"sphere {s} per-face mean", face, 0.05), (f"sphere {s} wall s", wall, 15.0)]
+code = int(open(os.path.join(work, "W.code")).read())
+wall, cpu, rss = timing("W")
+j = json.load(open(os.path.join(work, "W.json"))) if os.path.exists(os.path.join(work, "W.json")) else {}
+e = json.load(open(os.path.join(work, "W.eval.json")))
+m = j.get("metrics", {})
+cv, face, flips = m.get("element_cv", float("nan")), ev(m, "face_ln_area_abs", "mean"), m.get("flips", 1e9)
+limit = ev(j, "acceptance", "limits", "element_cv_64x32")
+print(f"\none-surface rectangle of the closed white hemisphere: exit {code}, {wall:.1f} s wall, {rss:.0f} MB, flips {flips}, "
+      f"element CV 64x32 {cv:.5f} (limit {limit:.4f}), per-face mean {face:.4f}; evalmap flips {e.get('flips', 'nan')}, "
+      f"CV {e.get('element_area_cv', float('nan')):.5f}")
+reqs += [("rectangle --surface white exit code", code, 0), ("rectangle --surface white flips", flips, 0),
+         ("rectangle --surface white evalmap flips", e.get("flips", 1e9), 0), ("rectangle --surface white element CV", cv, 0.01)]
 code = int(open(os.path.join(work, "run.code")).read())
 wall, cpu, rss = timing("run")
 log = os.path.join(work, "run", "sub-fs741", "sub-fs741_log.txt")

@@ -276,12 +276,13 @@ RectanglePart rectangle_part_from_square(const SquareMapResult& square, double x
   RectanglePart part;
   part.V = square.V;
   part.F = square.F;
-  // x -> x0 + width x scales every area by `width`: the square's area ratios all change by the
-  // same factor, so an authalic square is authalic on its share of the rectangle.
+  // x -> x0 + s x scales every area by s: the square's area ratios all change by the same factor,
+  // so an authalic square is authalic on its share of the rectangle.
+  const double s = width / square.width;
   part.UV = square.UV;
-  part.UV.col(0) = (x0 + width * square.UV.col(0).array()).matrix();
+  part.UV.col(0) = (x0 + s * square.UV.col(0).array()).matrix();
   part.UV_initial = square.UV_initial;
-  part.UV_initial.col(0) = (x0 + width * square.UV_initial.col(0).array()).matrix();
+  part.UV_initial.col(0) = (x0 + s * square.UV_initial.col(0).array()).matrix();
   part.vertex_origin = VectorXi::Constant(square.V.rows(), -1);
   for (int i = 0; i < square.num_input_vertices; ++i) part.vertex_origin[i] = i;
   part.num_input_vertices = square.num_input_vertices;
@@ -365,7 +366,17 @@ WholeBrainRectangle whole_brain_rectangle_map(const TriMesh& mesh, const Rectang
       for (Eigen::Index i = 0; i < G.rows(); ++i) G.row(i) = sr.sphere.row(cut.vertex_origin[i]);
       return map_disk(cut.mesh.V, G, cut.mesh.F, from, rectangle_left_middle(W), W, options.flow, options.transport_passes, progress);
     }
-    return map_disk(cut.mesh.V, cut.mesh.V, cut.mesh.F, from, rectangle_left_middle(W), W, options.flow, options.transport_passes, progress);
+    // On the surface itself: the square map's engine (stretch-energy start, flow, polish) on the
+    // 2:1 domain, which handles the slit tips' and a native mesh's compression.
+    SquareMapOptions so;
+    so.width = W;
+    so.flow = options.flow;
+    so.anatomical_anchor = false;
+    so.anchor_vertex = from;
+    so.anchor_position = rectangle_left_middle(W);
+    so.orient_outward = false;  // the closed surface's orientation, checked above
+    so.region_name = "cut surface";
+    return rectangle_part_from_square(square_map(cut.mesh.V, cut.mesh.F, so, progress), 0.0, W);
   };
   auto acceptable = [](const RectanglePart& p, int* flips, double* face_error) {
     *flips = count_flipped(p.UV, p.F);
@@ -378,11 +389,17 @@ WholeBrainRectangle whole_brain_rectangle_map(const TriMesh& mesh, const Rectang
     return *flips == 0 && *face_error <= 0.1;
   };
   const bool sphere_first = options.initial == RectangleInitial::Sphere;
-  out.map = attempt(sphere_first);
+  bool first_failed = false;
+  try {
+    out.map = attempt(sphere_first);
+  } catch (const ProcessingError&) {  // folded triangles the repair could not remove
+    if (options.initial != RectangleInitial::Auto) throw;
+    first_failed = true;
+  }
   out.initial_used = sphere_first ? RectangleInitial::Sphere : RectangleInitial::Surface;
-  int flips = 0;
+  int flips = std::numeric_limits<int>::max();
   double err = 0;
-  if (options.initial == RectangleInitial::Auto && !acceptable(out.map, &flips, &err)) {
+  if (options.initial == RectangleInitial::Auto && (first_failed || !acceptable(out.map, &flips, &err))) {
     RectanglePart second = attempt(true);
     int flips2 = 0;
     double err2 = 0;

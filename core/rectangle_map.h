@@ -5,9 +5,9 @@
 // (a) One closed genus-0 surface: cut open along a path on the inferior-medial side between two
 //     landmark vertices ("sliced open along the medial plane at the bottom, without passing any
 //     significant anatomical features", Zou et al. 2011b section 4), which yields a disk; the disk is
-//     mapped like the square map with W = 2 (core/conformal_map.h: boundary by arc length on the
-//     perimeter, harmonic interior; core/authalic_flow.h: Moser/Lie flow on [0, 2] x [0, 1]),
-//     the initial map computed on the authalic sphere image of the surface (see below).
+//     mapped by the square map's engine with W = 2 (core/square_map.h: boundary by arc length on
+//     the perimeter, conformal interior, stretch-energy start, Moser/Lie flow on [0, 2] x [0, 1]);
+//     alternatively the initial map is computed on the authalic sphere image (see below).
 //     Layout: the anterior landmark at the middle of the left side (0, 0.5); both sides of the
 //     cut have the same length, so the posterior landmark lands at the middle of the right side
 //     (2, 0.5), one side of the cut runs along the bottom and the other along the top.
@@ -103,17 +103,15 @@ struct WholeBrainRectangle {
   int attempts = 1;           // 2 when Auto fell back to the sphere image
 };
 // Form (a). mesh: closed, oriented, genus-0 (InputError otherwise, with its measured topology).
-// Initial map: the harmonic map (arc-length boundary) of the cut disk, computed on the surface
-// itself (Surface, the literal construction) or on its authalic sphere image (Sphere,
-// core/sphere_map.h), whose metric is free of the cortical folding; either way the flow then
-// restores the surface's own areas. Auto tries Surface and falls back to Sphere when the result
-// has flipped triangles or a mean per-face |ln area ratio| above 0.1. Measured: on fsaverage5
-// white_left the slit tips' square-root singularity plus the folding leave the flow from Surface
-// with 458 flipped triangles, from Sphere 0 (element CV 0.006); an ellipsoid works from Surface.
-// Flow: the slit tips start with almost no cortex (density ~1/300 of the mean) and need a large
-// transport, which authalic_flow's flip-limited passes freeze; `transport_passes` plain Moser
-// passes (core/authalic_flow.h moser_grid_pass) do it first, then authalic_flow repairs any
-// flipped triangle and polishes.
+// Initial map: on the cut surface itself (Surface: square_map with W = 2, anchored at the
+// anterior cut vertex), or the harmonic map computed on its authalic sphere image (Sphere,
+// core/sphere_map.h) followed by plain Moser passes and the flow. Auto tries Surface and falls
+// back to Sphere when Surface fails or leaves flipped triangles or a mean per-face |ln area ratio|
+// above 0.1. Measured (2026-12-07): Surface maps fsaverage5 white_left (0 flips, element CV
+// 0.0022 at 64x32, 0.7 s) and fs741's native white and pial hemispheres (0 flips, CV 0.0096 and
+// 0.0017; about 60 s, the slit tips' far faces polished); Sphere fails on both (fsaverage5: 1096
+// flipped triangles, CV 0.67). The slit tips start with almost no cortex (density ~1/300 of the
+// mean): the stretch-energy start does most of that transport before the flow.
 WholeBrainRectangle whole_brain_rectangle_map(const TriMesh& mesh, const RectangleMapOptions& options = {},
                                               const ProgressFn& progress = {});
 

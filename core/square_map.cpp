@@ -191,7 +191,12 @@ SquareMapResult square_map(const MatrixXd& V, const MatrixXi& F_in, const Square
   b.flip_dividing_edges = opt.flip_dividing_edges;
   if (opt.stretch_start) b.fallback = HarmonicWeights::ClampedCotangent;
   b.try_cotangent = !opt.stretch_start || opt.cotangent_start;
-  if (opt.anatomical_anchor) R.anterior_vertex = anterior_boundary_anchor(V, F, b);
+  if (opt.anatomical_anchor) {
+    R.anterior_vertex = anterior_boundary_anchor(V, F, b);
+  } else if (opt.anchor_vertex >= 0) {
+    b.anchor_vertex = R.anterior_vertex = opt.anchor_vertex;
+    b.anchor_position = opt.anchor_position;
+  }
   const bool given_start = opt.start_uv.rows() > 0;
   if (given_start) {
     if (opt.start_uv.rows() != V.rows() || opt.start_uv.cols() != 2)

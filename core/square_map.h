@@ -38,7 +38,11 @@ struct SquareMapOptions {
   double width = 1.0;        // 1: the unit square; 2: the whole-brain 2:1 rectangle; any W > 0
   FlowOptions flow;          // flow.width is set from `width`
   VectorXd density;          // optional per-vertex density (#V of the input, > 0), DLF 5.5
-  bool anatomical_anchor = true;  // rule 2 above; false: the boundary starts at its first vertex at (0, 0)
+  bool anatomical_anchor = true;  // rule 2 above; false: anchor_vertex, else the boundary's first vertex at (0, 0)
+  // Without the anatomical anchor: this boundary vertex goes to the perimeter coordinate
+  // anchor_position (core/domain.h), e.g. a cut surface's anterior cut vertex to the left middle.
+  int anchor_vertex = -1;
+  double anchor_position = 0.0;
   bool orient_outward = true;     // rule 1 above
   // Optional: the faces (on V) of the whole surface the region was cut from, e.g. the closed
   // hemisphere of a cortex label; when it is closed, rule 1 takes the outside from it. Not owned:

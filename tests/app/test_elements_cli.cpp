@@ -180,20 +180,27 @@ TEST(ElementsCliRealData, MapsOfTheOtherCommandsPairWithTheirSurface) {
       << out;
   EXPECT_NEAR(total_area(dir + "/disk.surf.gii", "disk"), cortex, 1e-4 * cortex);  // its flipped dividing edges re-triangulate a little
 
-  // One hemisphere's part of a two-hemisphere rectangle (here a square map, the left part when the
-  // hemispheres' areas are equal) fills half the 2K x K cells: refused, not an area CV near 1.
+  // One hemisphere's part of a two-hemisphere rectangle (here a square map: the left part when the
+  // hemispheres' areas are equal) fills the cells on its side of the seam: its hemisphere, area CV
+  // and element size are those of its cells (they were "both", 1.0 and a voxel sqrt(2) too small).
   ASSERT_EQ(test::run_command(exe + " flatten " + white + " " + dir + "/sq.surf.gii --faces-from " + flat + " --uv " + dir +
                                   "/part.surf.gii -q",
                               &out),
             0)
       << out;
-  EXPECT_EQ(test::run_command(exe + " elements " + white + " " + dir + "/part.surf.gii " + dir + "/ones.shape.gii " + dir +
-                                  "/el_part --domain rectangle",
+  ASSERT_EQ(test::run_command(exe + " elements " + white + " " + dir + "/part.surf.gii " + dir + "/ones.shape.gii " + dir +
+                                  "/el_part --domain rectangle --k 16 --json",
                               &out),
-            2)
+            0)
       << out;
-  EXPECT_NE(out.find("one hemisphere's part; the rectangle's elements need both hemispheres"), std::string::npos) << out;
-  EXPECT_FALSE(std::filesystem::exists(dir + "/el_part.tsv"));
+  const auto part = nlohmann::json::parse(out.substr(out.find('{')));
+  EXPECT_EQ(part["hemisphere"], "left");
+  EXPECT_LT(part["element_area_cv"].get<double>(), 0.01);
+  EXPECT_NE(part["notes"].dump().find("left hemisphere's part of a two-hemisphere rectangle"), std::string::npos) << out;
+  io::VolumeReadOptions map_grid;
+  map_grid.allow_map_grid = true;
+  const io::Volume image = io::read_volume(dir + "/el_part_area.nii.gz", map_grid);
+  EXPECT_NEAR(image.voxel_size().x(), std::sqrt(cortex / (16 * 16)), 0.01 * std::sqrt(cortex / (16 * 16)));
 
   ASSERT_EQ(test::run_command(exe + " rectangle " + dir + "/rect.surf.gii --surface " + white + " --metrics " + dir + "/rect.json -q", &out), 0)
       << out;
