@@ -13,9 +13,10 @@
 //
 // Interpolation is trilinear between voxel centres. Out of the field of view: a point within half
 // a voxel of the outer voxel centres takes the edge value (the outer voxels' own extent), anything
-// further is NaN. NaN voxels (masked-out scanner data) are left out: the finite corners of the
-// interpolation cell are re-weighted; a point whose corners are all NaN is NaN. Along a sampling
-// segment NaN samples are skipped; a vertex with no finite sample is NaN.
+// further is NaN. NaN (and infinite) voxels, masked-out scanner data, are left out: the finite
+// corners of the interpolation cell are re-weighted; a point whose corners are all NaN is NaN. A
+// vertex whose segment has such a sample (part of it outside the field of view or on NaN voxels)
+// is NaN: the statistic of the rest would describe one end of the segment only.
 #include <Eigen/Core>
 
 #include <string>
@@ -76,6 +77,10 @@ struct SamplingResult {
   int vertices_outside = 0;      // of those, outside the field of view (at the vertex itself)
   double outside_fraction = 0.0;
   int nan_vertices = 0;          // vertices whose value is NaN
+  // Vertices inside the field of view whose segment has a sample outside it or on NaN voxels:
+  // NaN, as a statistic over part of the segment leans toward one end of it (the deeper, white
+  // matter end where the PET's field of view cuts the cortex).
+  int partial_vertices = 0;
   bool normals_flipped = false;  // faces were clockwise seen from outside: normals were reversed
   std::vector<std::string> notes;
 };

@@ -252,6 +252,7 @@ int run_sample(const SampleArgs& a) {
     j["vertices_outside_fov"] = result.vertices_outside;
     j["outside_fraction"] = result.outside_fraction;
     j["nan_vertices"] = result.nan_vertices;
+    j["partial_vertices"] = result.partial_vertices;
     j["normals_flipped"] = result.normals_flipped;
     j["normalisation"] = analysis::to_string(norm.kind);
     j["normalisation_reference_value"] = norm.reference_value;
@@ -274,7 +275,8 @@ const bool registered = register_command({40, [](CLI::App& parent) {
       "sform/qform world (scanner RAS mm; radiological files included); FreeSurfer surfaces are moved from tkregister "
       "RAS to scanner RAS with their c_ras, or by --surface-to-volume. A surface mostly outside the volume is refused. "
       "Writes OUT (GIFTI func, one value per vertex, normalisation in its metadata) and a PNG beside it. NaN voxels are "
-      "left out of the interpolation; vertices with no finite sample are NaN.");
+      "left out of the interpolation; a vertex whose sampling segment leaves the field of view or meets only NaN voxels "
+      "somewhere is NaN (a value from part of the segment would lean toward one end of it).");
   sub->add_option("VOLUME", a->volume, "PET volume: NIfTI (.nii/.nii.gz), MGH/MGZ, or a DICOM series folder")->required();
   sub->add_option("SURFACE", a->surface, "Cortical surface (FreeSurfer, GIFTI, VTK, ...), mm")->required();
   sub->add_option("OUT", a->out, "Output per-vertex values (.func.gii)")->required();

@@ -130,6 +130,37 @@ TEST(Sampling, RefusesSurfaceMostlyOutsideTheFieldOfViewAndSaysHowMuch) {
   EXPECT_EQ(r.notes.size(), 1u);
 }
 
+// A vertex whose inward segment leaves the field of view (or crosses NaN or infinite voxels) has
+// no value: the mean of the rest describes the segment's deep end only (a PET whose axial field
+// of view cuts the cortex gave biased values there, read as hypometabolism).
+TEST(Sampling, APartlySampledSegmentGivesNoValueAndIsCounted) {
+  io::Volume vol = function_volume({20, 20, 20}, Eigen::Matrix4d::Identity(), linear_f);
+  TriMesh m = sphere_mesh(3, 5.0, Eigen::Vector3d(10, 10, 10));
+  const SamplingResult whole = sample_normal_projection(vol, m.V, m.F);
+  EXPECT_EQ(whole.partial_vertices, 0);
+  EXPECT_EQ(whole.nan_vertices, 0);
+  // The sphere's centre on the volume's x = 0 face: the inward segments (10 mm, through the centre)
+  // of the vertices inside the field of view (x >= -0.5) leave it on the other side.
+  m.V.col(0).array() -= 10.0;
+  const SamplingResult cut = sample_normal_projection(vol, m.V, m.F);
+  EXPECT_GT(cut.partial_vertices, 0);
+  int inside_with_value = 0, inside_nan = 0;
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    if (m.V(v, 0) < -0.5) continue;
+    (std::isnan(cut.values(v)) ? inside_nan : inside_with_value)++;
+  }
+  EXPECT_EQ(inside_nan, cut.partial_vertices);  // every inside vertex without a value is a partial one
+  EXPECT_GT(inside_with_value, 0);
+  EXPECT_EQ(cut.nan_vertices, cut.vertices_outside + cut.partial_vertices);
+  bool noted = false;
+  for (const auto& n : cut.notes) noted |= n.find("have part of their sampling segment outside the field of view") != std::string::npos;
+  EXPECT_TRUE(noted);
+  // An infinite voxel is left out of the interpolation as a NaN one is (it gave Inf values).
+  io::Volume inf = function_volume({4, 4, 4}, Eigen::Matrix4d::Identity(), [](const Eigen::Vector3d&) { return 2.0; });
+  inf.data[1 + 4 * (1 + 4 * 1)] = std::numeric_limits<float>::infinity();
+  EXPECT_DOUBLE_EQ(TrilinearSampler(inf)(Eigen::Vector3d(1.5, 1.5, 1.5)), 2.0);
+}
+
 TEST(Sampling, DeterministicForOneAndTwoThreads) {
   const io::Volume vol = function_volume({60, 70, 50}, test::oblique_radiological_affine(),
                                          [](const Eigen::Vector3d& p) { return std::sin(p.x() / 7) * std::cos(p.y() / 5) + p.z() / 50; });
