@@ -590,12 +590,12 @@ Comparison compare_elements(const NormativeReference& ref, const ElementTable& p
   out.threshold = options.threshold;
   out.predictive = options.predictive;
   out.patient_age = std::isfinite(options.age) ? options.age : patient.age;
-  const bool age_model = has_age_model(ref);
+  const bool age_model = has_age_model(ref, options.age_model_min_controls);
   out.age_adjusted = options.use_age && age_model && std::isfinite(out.patient_age);
   if (options.use_age && age_model && !std::isfinite(out.patient_age))
     out.notes.push_back("the reference has an age model but the patient's age is unknown: z-scores are not age-adjusted");
-  if (ref.age_model && !age_model)
-    out.notes.push_back("the reference's controls are all of one age: no age model, z-scores are not age-adjusted");
+  if (options.use_age && ref.age_model && !age_model)
+    out.notes.push_back(age_model_absent_reason(ref, options.age_model_min_controls) + ": no age model, z-scores are not age-adjusted");
   for (const auto& s : ref.subjects)
     if (!patient.subject_id.empty() && s.id == patient.subject_id)
       out.notes.push_back("subject '" + s.id + "' is one of the reference's controls: its z-scores are biased toward 0");
@@ -612,7 +612,7 @@ Comparison compare_elements(const NormativeReference& ref, const ElementTable& p
     if (n < min_n) continue;
     double expected = ref.mean[i], sd = ref.sd(static_cast<int>(i));
     double inflation = 1 + 1 / n;  // predictive: the uncertainty of the reference mean
-    if (out.age_adjusted && ref.age_m2[i] > 0) {
+    if (out.age_adjusted && ref.age_m2[i] > 0 && n >= options.age_model_min_controls) {
       // Least-squares line in age; SD of the residuals (n - 2 degrees of freedom).
       const double beta = ref.comoment[i] / ref.age_m2[i];
       const double da = out.patient_age - ref.age_mean[i];
@@ -732,6 +732,7 @@ void measure_chance_clusters(const NormativeReference& ref, const ElementTable& 
       control.age = ref.subjects[s].age;
       CompareOptions each = options;
       each.chance_clusters = false;
+      each.age_model_min_controls = options.age_model_min_controls - 1;  // the patient's model, one control less
       each.age = ref.subjects[s].age;
       for (std::size_t b = 0; b < control.blocks.size(); ++b)
         for (int e = 0; e < ne; ++e)
@@ -945,8 +946,18 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
   return p;
 }
 
-bool has_age_model(const NormativeReference& ref) {
-  return ref.age_model && std::any_of(ref.age_m2.begin(), ref.age_m2.end(), [](double m2) { return m2 > 0; });
+bool has_age_model(const NormativeReference& ref, int min_controls) {
+  return age_model_absent_reason(ref, min_controls).empty() && ref.age_model;
+}
+
+std::string age_model_absent_reason(const NormativeReference& ref, int min_controls) {
+  if (!ref.age_model) return "";
+  if (static_cast<int>(ref.subjects.size()) < min_controls)
+    return "the reference has " + std::to_string(ref.subjects.size()) + " controls; the age model needs at least " +
+           std::to_string(min_controls) + " (a line through fewer leaves too few degrees of freedom for its SD)";
+  if (std::none_of(ref.age_m2.begin(), ref.age_m2.end(), [](double m2) { return m2 > 0; }))
+    return "the reference's controls are all of one age";
+  return "";
 }
 
 }  // namespace authalic::analysis

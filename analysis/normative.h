@@ -111,9 +111,19 @@ struct NormativeReference {
   double sd(int i) const;
 };
 
-// Whether z can be age adjusted against `ref`: every control had an age (age_model) and the ages
-// differ (a slope needs a spread; controls all of one age give age_m2 = 0 and no model).
-bool has_age_model(const NormativeReference& ref);
+// The age model fits a line per element, leaving n - 2 degrees of freedom for its residual SD:
+// with few controls that SD can all but vanish (3 controls, 1 degree of freedom: z-scores in the
+// tens of thousands, measured on the synthetic phantom). With 8 controls it keeps 6, and each
+// leave-one-out reference of the chance clusters 5.
+inline constexpr int kMinAgeModelControls = 8;
+
+// Whether z can be age adjusted against `ref`: every control had an age (age_model), there are at
+// least `min_controls` of them (kMinAgeModelControls; its leave-one-out references are judged
+// with one less) and the ages differ (a slope needs a spread; controls all of one age give
+// age_m2 = 0 and no model).
+bool has_age_model(const NormativeReference& ref, int min_controls = kMinAgeModelControls);
+// Why a reference with ages has no age model ("" when it has one or has no ages).
+std::string age_model_absent_reason(const NormativeReference& ref, int min_controls = kMinAgeModelControls);
 
 // An empty reference shaped like `table` (grid, hemispheres, normalisation, units).
 NormativeReference empty_reference_like(const ElementTable& table);
@@ -155,6 +165,9 @@ struct CompareOptions {
   bool use_age = true;           // use the age model when the reference has one and the age is known
   double age = std::numeric_limits<double>::quiet_NaN();  // patient's age (years); NaN = from the table
   int min_subjects = 3;          // elements with fewer controls get no z
+  // The age model needs this many controls (kMinAgeModelControls; one less for a leave-one-out
+  // reference, so that the controls' chance clusters use the patient's model).
+  int age_model_min_controls = kMinAgeModelControls;
   // SD of the comparison. true: the predictive SD of a new control's value, the reference SD times
   // sqrt(1 + 1/n), with the age model the residual SD times sqrt(1 + 1/n + (age - mean age)^2 /
   // sum of squared age deviations) (the single case against a control sample: Crawford & Howell

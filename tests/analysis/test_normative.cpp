@@ -266,6 +266,20 @@ TEST(Normative, AgeModelEqualsDirectLeastSquaresFit) {
   bool noted = false;
   for (const auto& n : no_slope.notes) noted = noted || n.find("all of one age") != std::string::npos;
   EXPECT_TRUE(noted);
+  // Fewer controls than kMinAgeModelControls: a line through them leaves too few degrees of
+  // freedom for its residual SD (3 controls gave z in the tens of thousands): the plain mean and
+  // SD, with a note saying why.
+  const NormativeReference few = build_from(tables, 0, kMinAgeModelControls - 1);
+  EXPECT_TRUE(few.age_model);
+  EXPECT_FALSE(has_age_model(few));
+  EXPECT_TRUE(has_age_model(few, kMinAgeModelControls - 1));  // as its parent's leave-one-out reference
+  const Comparison small = compare_to_reference(few, patient, plain_sd);
+  EXPECT_FALSE(small.age_adjusted);
+  EXPECT_NEAR(small.z[e], (0.8 - few.mean[e]) / few.sd(e), 1e-9);
+  noted = false;
+  for (const auto& n : small.notes) noted = noted || n.find("the age model needs at least 8") != std::string::npos;
+  EXPECT_TRUE(noted);
+  EXPECT_TRUE(has_age_model(build_from(tables, 0, kMinAgeModelControls)));
 }
 
 // Leaving a control out by undoing its Welford update (for the chance clusters) gives the
