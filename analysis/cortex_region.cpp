@@ -39,6 +39,7 @@ CortexRegion read_cortex_region(const TriMesh& white, const std::string& white_p
   if (!c.is_disk())
     throw InputError(cortex_path + " on " + white_path + ": " + c.problem() +
                      "; the map needs a region with one boundary loop, e.g. FreeSurfer's ?h.cortex.label");
+  if (const std::string pieces = c.pieces_problem(); !pieces.empty()) throw InputError(cortex_path + " on " + white_path + ": " + pieces);
   region.F = c.F;
   region.topology = c.topology;
   std::ostringstream line;

@@ -94,6 +94,7 @@ MatrixXi region_faces(const FlattenArgs& a, const io::Surface& surface, std::str
                        "; the square map needs one disk: check that the label is this surface's cortex with the medial "
                        "wall left out" +
                        (c->holes_unfilled > 0 ? std::string(", and fill the holes too large to fill automatically") : ""));
+    if (const std::string pieces = c->pieces_problem(); !pieces.empty()) throw InputError(a.label + " on " + a.surface + ": " + pieces);
     *source = "faces inside label " + a.label;
     MatrixXi F = c->F;
     *cleanup = std::move(c);

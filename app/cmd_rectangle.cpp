@@ -328,11 +328,35 @@ void run_one_surface(const RectangleArgs& a) {
   finish(a, {&r.map}, {shading}, j, seconds, a.surface, checked);
 }
 
+// The left part of the rectangle must be the left hemisphere: a swapped pair (or one file given
+// twice) made a left/right swapped rectangle labelled CortexLeft on the right hemisphere. The
+// files' GIFTI structure decides; without it, the left hemisphere lies at smaller RAS x.
+void require_left_and_right(const io::Surface& lh, const std::string& lh_path, const io::Surface& rh, const std::string& rh_path) {
+  auto structure = [](const io::Surface& s) {
+    const auto it = s.metadata.find("AnatomicalStructurePrimary");
+    return it == s.metadata.end() ? std::string() : it->second;
+  };
+  const std::string ls = structure(lh), rs = structure(rh);
+  if (ls.find("Right") != std::string::npos || rs.find("Left") != std::string::npos)
+    throw InputError((ls.find("Right") != std::string::npos ? lh_path + ": is " + ls + " (its GIFTI structure) but was given as --lh"
+                                                             : rh_path + ": is " + rs + " (its GIFTI structure) but was given as --rh") +
+                     "; give the left hemisphere as --lh and the right as --rh");
+  const double lx = lh.mesh.V.col(0).mean(), rx = rh.mesh.V.col(0).mean();
+  if (!(lx < rx)) {
+    char buf[200];
+    std::snprintf(buf, sizeof(buf), ": the left hemisphere lies at larger or equal RAS x (mean %.1f mm) than the right one (%s, mean %.1f mm)",
+                  lx, rh_path.c_str(), rx);
+    throw InputError(lh_path + buf + (lh_path == rh_path ? "; the same file was given twice" : "; left and right look swapped") +
+                     ": give the left hemisphere as --lh and the right as --rh");
+  }
+}
+
 void run_two_hemispheres(const RectangleArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   io::Surface ls, rs;
   const TriMesh left = read_cortex(a.lh, a.lh_faces, a.lh_cortex, "left", &ls);
   const TriMesh right = read_cortex(a.rh, a.rh_faces, a.rh_cortex, "right", &rs);
+  require_left_and_right(ls, a.lh, rs, a.rh);
   HemisphereRectangles r;
   try {
     r = hemisphere_rectangle_map(left, right, {}, terminal_progress());

@@ -340,12 +340,16 @@ RegionCleanup region_faces_from_vertices(const MatrixXd& V, const MatrixXi& F, c
     if (island_of[f] >= 0 && island_of[f] != kept && !mask[f]) island_dropped[island_of[f]] = 1;
   r.islands_dropped = static_cast<int>(std::count(island_dropped.begin(), island_dropped.end(), 1));
   std::vector<char> island_faces(static_cast<std::size_t>(s.nf), 0);
+  std::vector<double> island_area(island_dropped.size(), 0.0);
   for (int f = 0; f < s.nf; ++f)
     if (island_of[f] >= 0 && island_dropped[island_of[f]]) {
       island_faces[f] = 1;
       ++r.island_faces;
       r.island_area_mm2 += s.A[f];
+      island_area[static_cast<std::size_t>(island_of[f])] += s.A[f];
     }
+  for (double a : island_area) r.largest_island_mm2 = std::max(r.largest_island_mm2, a);
+  r.largest_island_fraction = region_area > 0 ? r.largest_island_mm2 / region_area : 0.0;
 
   // 4. Pinch vertices left: remove the smaller fans, then any piece cut loose.
   const std::vector<char> removed = remove_smaller_fans(s, F, mask);
@@ -410,6 +414,16 @@ std::string RegionCleanup::summary() const {
   std::string out;
   for (std::size_t i = 0; i < parts.size(); ++i) out += (i ? ", " : "") + parts[i];
   return out;
+}
+
+std::string RegionCleanup::pieces_problem() const {
+  if (islands_dropped == 0 || !(largest_island_fraction >= max_hole_fraction) || max_hole_fraction <= 0) return "";
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), "%.1f mm^2 (%.1f %% of the largest piece)", largest_island_mm2, 100.0 * largest_island_fraction);
+  return "the region is " + std::to_string(islands_dropped + 1) + " pieces: " +
+         (islands_dropped == 1 ? std::string("a second piece of ") : std::string("the second largest of ")) + buf +
+         " would be left out of the map (pieces below " + mm2(100.0 * max_hole_fraction) +
+         " % of the largest are dropped as stray label vertices); give one piece of cortex, or map each piece with its own label";
 }
 
 std::string RegionCleanup::problem() const {

@@ -58,6 +58,8 @@ struct RegionCleanup {
   int island_faces = 0;
   int island_vertices = 0;    // label vertices lost with them (not in the cleaned region)
   double island_area_mm2 = 0;
+  double largest_island_mm2 = 0;  // the largest dropped island, and its share of the kept piece
+  double largest_island_fraction = 0;
 
   // Step 3: holes filled.
   int holes_filled = 0;
@@ -98,6 +100,11 @@ struct RegionCleanup {
   // (1.38 % of the region before filling, 17 vertices; holes below 1 % of the region are filled)", then
   // "; cleanup: <summary()>" when something was changed.
   std::string problem() const;
+  // Empty unless an island of at least max_hole_fraction of the kept piece was dropped: then the
+  // label is more than one piece of cortex (a map of the largest would leave the others out
+  // without a word), e.g. "the region is 2 pieces: an island of 46356.6 mm^2 (97.3 % of the
+  // largest piece, 70351 vertices) would be left out; ...".
+  std::string pieces_problem() const;
 };
 
 RegionCleanup region_faces_from_vertices(const MatrixXd& V, const MatrixXi& F, const std::vector<bool>& in_region,

@@ -325,6 +325,24 @@ TEST(RectangleCli, TwoHemispheresFillTheRectangleMirrorSymmetric) {
     ASSERT_NEAR(r.mesh.V(v, 1), l.mesh.V(v, 1), 1e-5);
   }
   EXPECT_GT(authalic::io::read_png(dir + "/r.png").width, 500);
+  // Swapped hemispheres, or one given twice, would make a left/right swapped rectangle labelled
+  // CortexLeft on the right hemisphere (it was accepted): refused, nothing written.
+  EXPECT_EQ(run_command(authalic_binary() + " rectangle " + dir + "/swapped --lh " + dir + "/rh.white.surf.gii --lh-faces-from " + dir +
+                            "/rh.faces.surf.gii --rh " + white + " --rh-faces-from " + flat + " -q",
+                        &output),
+            2)
+      << output;
+  EXPECT_NE(output.find(" is CortexLeft (its GIFTI structure) but was given as --rh"), std::string::npos) << output;
+  // Without a GIFTI structure (the mirror image written here has none), by the side of the midline.
+  const std::string rhw = dir + "/rh.white.surf.gii", rhf = dir + "/rh.faces.surf.gii";
+  EXPECT_EQ(run_command(authalic_binary() + " rectangle " + dir + "/twice --lh " + rhw + " --lh-faces-from " + rhf + " --rh " + rhw +
+                            " --rh-faces-from " + rhf + " -q",
+                        &output),
+            2)
+      << output;
+  EXPECT_NE(output.find("the same file was given twice"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists(dir + "/swapped.lh.surf.gii"));
+  EXPECT_FALSE(fs::exists(dir + "/twice.lh.surf.gii"));
 }
 
 TEST(RectangleCli, OneClosedSurfaceCutOpenFillsTheRectangle) {

@@ -146,6 +146,26 @@ TEST(RegionCleanup, AHoleAboveTheLimitIsLeftAndItsSizeReported) {
   EXPECT_NEAR(filled.hole_area_mm2, hole, 1e-9);
 }
 
+// A label of two large pieces (e.g. a cortex label cut in two): mapping the largest would leave
+// the other out (half the cortex was dropped with exit 0). Small pieces are stray vertices.
+TEST(RegionCleanup, ALargeSecondPieceIsNamedNotDropped) {
+  const TriMesh m = icosphere(4);
+  std::vector<bool> two(static_cast<std::size_t>(m.num_vertices()), false), stray = two;
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    two[static_cast<std::size_t>(v)] = std::abs(m.V(v, 2)) > 0.3;      // two polar caps
+    stray[static_cast<std::size_t>(v)] = m.V(v, 2) > -0.5 || m.V(v, 2) < -0.99;  // a cap and a few vertices
+  }
+  const RegionCleanup r = region_faces_from_vertices(m.V, m.F, two);
+  EXPECT_TRUE(r.is_disk());  // the kept cap is a disk
+  EXPECT_EQ(r.islands_dropped, 1);
+  EXPECT_NEAR(r.largest_island_fraction, 1.0, 0.05);  // the caps are mirror images
+  EXPECT_NE(r.pieces_problem().find("the region is 2 pieces: a second piece of "), std::string::npos) << r.pieces_problem();
+  const RegionCleanup s = region_faces_from_vertices(m.V, m.F, stray);
+  EXPECT_EQ(s.islands_dropped, 1);
+  EXPECT_LT(s.largest_island_fraction, 0.01);
+  EXPECT_EQ(s.pieces_problem(), "");
+}
+
 TEST(RegionCleanup, PinchAroundSmallPocketsIsFixedByFillingThem) {
   // Square grid (open: its border is the outer side). Two 1-vertex holes at (5,5) and (7,7) touch
   // at vertex (6,6), whose region faces form two fans.
