@@ -57,6 +57,18 @@ struct FlattenArgs {
   long long max_vertices = 1000000;
 };
 
+// What to try after a grid flow that did not reach the acceptance: more passes and a finer grid,
+// unless they were given already; then the region's shape (a narrow neck or a long thin part
+// needs more transport through it than the flow can carry).
+std::string grid_flow_advice(int passes, int grid) {
+  std::string more;
+  if (passes < 6) more += "more passes (--passes 6)";
+  if (grid < 1024) more += std::string(more.empty() ? "" : " or ") + "a finer grid (--grid 1024)";  // 0: from the region's size
+  if (!more.empty()) return "Try " + more + "; ";
+  return "More passes and a finer grid were used: check the region for a narrow neck or a long thin part, which the flow "
+         "cannot fill evenly (the label's shape, not the options, is what to change); ";
+}
+
 // The anatomical orientation rule as the outputs state it, for the square or the disk.
 std::string orientation_rule(bool disk) {
   return std::string("faces oriented outward and the map orientation-preserving, so the lateral surface faces the viewer; the "
@@ -492,7 +504,7 @@ void run(const FlattenArgs& a) {
       : a.method == "mesh" ? std::string(a.no_polish ? "Drop --no-polish (the per-face polish finishes the mesh flow) or use "
                                                        "the default --method grid; "
                                                      : "Try the default --method grid; ")
-                           : std::string("Try more passes (--passes 6) or a finer grid (--grid 1024); ");
+                           : grid_flow_advice(a.passes, a.grid);
   if (!problem.empty() && !a.keep_failed)
     throw ProcessingError(failure + "; nothing was written. " + advice + "--keep-failed writes the map for inspection, marked as failed");
 

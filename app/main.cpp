@@ -20,6 +20,8 @@
 #include <iostream>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "app/command.h"
 #include "core/error.h"
 #include "core/version.h"
@@ -325,20 +327,27 @@ int main(int argc, char** argv) {
   for (const auto& c : commands) c.setup(cli);
   app::show_defaults(cli);
 
+  // --json: a failure is a JSON object on stdout too ({"error", "kind", "exit_code"}), so a script
+  // that parses stdout gets one on every exit; the line on stderr is the same.
+  const bool json = app::global_options().json || std::any_of(argv + 1, argv + argc, [](const char* a) { return std::string(a) == "--json"; });
+  auto fail = [json](const char* kind, const std::string& prefix, const std::string& what, int code) {
+    std::cerr << prefix << what << '\n';
+    if (json) std::cout << nlohmann::json{{"error", what}, {"kind", kind}, {"exit_code", code}}.dump(2) << '\n';
+    return code;
+  };
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return cli.exit(e);  // --help, --version
     const int code = cli.exit(e);
+    if (json) std::cout << nlohmann::json{{"error", e.what()}, {"kind", "usage"}, {"exit_code", 2}}.dump(2) << '\n';
     return code == 0 ? 0 : 2;  // usage errors are bad input
   } catch (const InputError& e) {
-    std::cerr << "authalic: error: " << e.what() << '\n';
-    return 2;
+    return fail("bad input", "authalic: error: ", e.what(), 2);
   } catch (const ProcessingError& e) {
-    std::cerr << "authalic: processing failed: " << e.what() << '\n';
-    return 3;
+    return fail("processing failed", "authalic: processing failed: ", e.what(), 3);
   } catch (const std::exception& e) {
-    std::cerr << "authalic: error: " << e.what() << '\n';
-    return 3;
+    return fail("internal error", "authalic: error: ", e.what(), 3);
   }
   return app::g_exit_code;
 }

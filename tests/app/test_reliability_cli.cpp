@@ -251,6 +251,16 @@ TEST(ReliabilityCli, SmallCommandsDoWhatTheirHelpSays) {
   ASSERT_NE(out.find('{'), std::string::npos) << out;
   EXPECT_EQ(nlohmann::json::parse(out.substr(out.find('{'))).at("output"), dir + "/r.png");
   expect_refused(bin() + " render " + q(dir + "/r2.png") + " " + q(dir + "/uv.surf.gii") + " --range 2 -2", "--range: LO must be below HI", {});
+  // --json: a failure is a JSON object on stdout too (stdout was empty), usage errors included.
+  EXPECT_EQ(test::run_command(bin() + " render " + q(dir + "/r2.png") + " " + q(dir + "/uv.surf.gii") + " --range 2 -2 --json", &out), 2);
+  ASSERT_NE(out.find('{'), std::string::npos) << out;
+  const auto failed = nlohmann::json::parse(out.substr(out.find('{')));
+  EXPECT_EQ(failed.at("exit_code"), 2);
+  EXPECT_EQ(failed.at("kind"), "bad input");
+  EXPECT_NE(failed.at("error").get<std::string>().find("--range: LO must be below HI"), std::string::npos) << out;
+  EXPECT_EQ(test::run_command(bin() + " render --json", &out), 2);
+  ASSERT_NE(out.find('{'), std::string::npos) << out;
+  EXPECT_EQ(nlohmann::json::parse(out.substr(out.find('{'))).at("kind"), "usage");
   EXPECT_FALSE(fs::exists(dir + "/r2.png"));
   io::write_per_vertex(dir + "/v.shape.gii", io::read_surface(patch).mesh.V.col(0));
   EXPECT_EQ(test::run_command(bin() + " elements " + q(patch) + " " + q(dir + "/uv.surf.gii") + " " + q(dir + "/v.shape.gii") + " " +
