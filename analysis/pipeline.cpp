@@ -689,6 +689,7 @@ LoadedInputs load_and_check_inputs(Hemisphere (&hemis)[2], const SubjectInputs& 
   pet_options.frame = options.pet_frame;
   pet_options.sum_frames = options.pet_sum_frames;
   r.pet = io::read_volume(in.pet, pet_options);
+  if (!r.pet.source_series.empty()) log.note("PET DICOM series read: " + r.pet.source_series);
   r.compare = !in.normative.empty();
   if (r.compare) r.reference = read_reference(in.normative);
   // Refused before any map is computed; without --require-age the comparison says so (step 5).

@@ -155,8 +155,9 @@ analysis::Normalisation sample_normalisation(const SampleArgs& a, const io::Volu
 }
 
 // The per-vertex output with its provenance (transform, sampling, normalisation) in the metadata.
-void write_sampled_values(const SampleArgs& a, const std::string& hemisphere, const analysis::SamplingResult& result,
-                          const SurfaceToVolume& to_volume, const analysis::Normalisation& norm) {
+void write_sampled_values(const SampleArgs& a, const io::Volume& volume, const std::string& hemisphere,
+                          const analysis::SamplingResult& result, const SurfaceToVolume& to_volume,
+                          const analysis::Normalisation& norm) {
   io::FuncWriteOptions fo;
   fo.column_names = {"pet"};
   if (hemisphere == "left") fo.anatomical_structure = "CortexLeft";
@@ -171,6 +172,7 @@ void write_sampled_values(const SampleArgs& a, const std::string& hemisphere, co
                  {"normalisation_detail", norm.description},
                  {"normalisation_reference_value", std::to_string(norm.reference_value)},
                  {"units", norm.units}};
+  if (!volume.source_series.empty()) fo.metadata["volume_series"] = volume.source_series;  // which DICOM series
   if (!a.ribbon.empty()) fo.metadata["ribbon_surface"] = a.ribbon;
   if (a.normalize == "global") fo.metadata["normalisation_region"] = a.cortex;
   io::write_per_vertex(a.out, result.values, fo);
@@ -233,7 +235,7 @@ int run_sample(const SampleArgs& a) {
   analysis::apply_normalisation(result.values, norm);
 
   const std::string hemisphere = analysis::hemisphere_of(surface.metadata, a.surface);
-  write_sampled_values(a, hemisphere, result, to_volume, norm);
+  write_sampled_values(a, volume, hemisphere, result, to_volume, norm);
   const std::string png = a.png.empty() ? png_path_for(a.out) : a.png;
   write_sample_png(a, png, surface, V_world, hemisphere, result.values, norm.units);
 

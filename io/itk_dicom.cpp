@@ -4,6 +4,8 @@
 // uses RAS, so x and y flip sign: RAS = diag(-1, -1, 1) * LPS.
 #include "io/itk_dicom.h"
 
+#include <gdcmScanner.h>
+#include <gdcmTag.h>
 #include <gdcmTrace.h>
 #include <gdcmUIDGenerator.h>
 #include <itkGDCMImageIO.h>
@@ -17,8 +19,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
-#include <set>
+#include <numeric>
 #include <sstream>
 
 #include "core/error.h"
@@ -49,6 +52,191 @@ std::string one_line(const std::string& s) {
   return out;
 }
 
+
+// Header tags read for every file before any pixel is: which series is which, and where each
+// slice lies.
+const gdcm::Tag kModality(0x0008, 0x0060);
+const gdcm::Tag kSeriesDescription(0x0008, 0x103e);
+const gdcm::Tag kSeriesUid(0x0020, 0x000e);
+const gdcm::Tag kPosition(0x0020, 0x0032);     // ImagePositionPatient (LPS mm)
+const gdcm::Tag kOrientation(0x0020, 0x0037);  // ImageOrientationPatient (row, column cosines)
+const gdcm::Tag kNumberOfFrames(0x0028, 0x0008);
+
+std::string trimmed(const char* value) {
+  if (!value) return {};
+  const std::string v(value);
+  const std::size_t b = v.find_first_not_of(" \0", 0, 2);
+  const std::size_t e = v.find_last_not_of(" \0", std::string::npos, 2);
+  return b == std::string::npos ? std::string() : v.substr(b, e - b + 1);
+}
+
+std::string scanned(const gdcm::Scanner& scanner, const std::string& file, const gdcm::Tag& tag) {
+  return trimmed(scanner.GetValue(file.c_str(), tag));
+}
+
+// A DICOM decimal string "a\b\c" with exactly n finite numbers, else empty.
+std::vector<double> decimals(const std::string& text, std::size_t n) {
+  std::vector<double> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, '\\')) {
+    const char* begin = item.c_str();
+    char* end = nullptr;
+    const double x = std::strtod(begin, &end);
+    if (end == begin || !std::isfinite(x)) return {};
+    out.push_back(x);
+  }
+  if (out.size() != n) out.clear();
+  return out;
+}
+
+std::string mm(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.3f mm", x);
+  return buf;
+}
+
+std::string file_name(const std::string& path) { return std::filesystem::path(path).filename().string(); }
+
+struct SeriesEntry {
+  std::string uid, description, modality;
+  std::vector<std::string> files;
+};
+
+std::string describe(const SeriesEntry& s) {
+  return s.uid + " '" + (s.description.empty() ? std::string("no description") : s.description) + "' (" +
+         (s.modality.empty() ? std::string("no modality") : s.modality) + ", " + std::to_string(s.files.size()) +
+         (s.files.size() == 1 ? " file)" : " files)");
+}
+
+// The one series to read: the PET series (Modality PT) when the folder has any, else all series;
+// more than one candidate is refused with their list (reading the largest one gave the CT of a
+// PET/CT export, or whichever of AC and NAC sorted first, as success).
+SeriesEntry choose_series(const std::string& dir, std::vector<SeriesEntry> all) {
+  const bool any_pet = std::any_of(all.begin(), all.end(), [](const SeriesEntry& s) { return s.modality == "PT"; });
+  std::vector<SeriesEntry> candidates;
+  for (const SeriesEntry& s : all)
+    if (!any_pet || s.modality == "PT") candidates.push_back(s);
+  if (candidates.size() == 1) return candidates.front();
+  std::string list;
+  const std::size_t shown = std::min<std::size_t>(candidates.size(), 8);
+  for (std::size_t i = 0; i < shown; ++i) list += (i ? "; " : "") + describe(candidates[i]);
+  if (shown < candidates.size()) list += "; and " + std::to_string(candidates.size() - shown) + " more";
+  const std::size_t ignored = all.size() - candidates.size();
+  const std::string what = std::to_string(candidates.size()) + (any_pet ? " PET series" : " series (none of them PET)") +
+                           (ignored ? " (besides " + std::to_string(ignored) + " non-PET series, ignored)" : std::string());
+  input_error(dir, "holds " + what + ", so which one to read is ambiguous: " + list,
+              "give a folder that holds only the series to read (move the other series' files to another folder)");
+}
+
+// The files of a single-frame-per-file series in order along the orientation's normal, after
+// checking that they form one regular stack: ITK's series reader places slice k at
+// first + k * (last - first) / (n - 1) with the in-plane axes of the first file, whatever the
+// positions say, so a missing slice, uneven spacing or a gantry tilt gave wrong positions as
+// success. Positions are compared as numbers (DICOM strings of one position may differ).
+std::vector<std::string> check_slice_stack(const std::string& dir, const std::vector<std::string>& files, const gdcm::Scanner& scanner) {
+  const std::size_t n = files.size();
+  if (n < 2) return files;  // one file (enhanced multi-frame included): GDCM reads its own geometry
+  for (const std::string& f : files) {
+    const std::string frames = scanned(scanner, f, kNumberOfFrames);
+    if (!frames.empty() && std::atoi(frames.c_str()) > 1) return files;  // multi-frame files: not checked here
+  }
+  const std::vector<double> iop = decimals(scanned(scanner, files.front(), kOrientation), 6);
+  if (iop.empty())
+    input_error(dir, file_name(files.front()) + " has no usable ImageOrientationPatient (0020,0037), so the slice geometry is unknown",
+                "give a complete PET DICOM series, or a NIfTI");
+  for (const std::string& f : files) {
+    const std::vector<double> other = decimals(scanned(scanner, f, kOrientation), 6);
+    bool same = !other.empty();
+    for (std::size_t i = 0; same && i < 6; ++i) same = std::abs(other[i] - iop[i]) <= 1e-4;
+    if (!same)
+      input_error(dir, "slices have different orientations (ImageOrientationPatient of " + file_name(f) + " differs from " +
+                           file_name(files.front()) + ")",
+                  "give a folder with one series of parallel slices");
+  }
+  const double r[3] = {iop[0], iop[1], iop[2]}, c[3] = {iop[3], iop[4], iop[5]};
+  double normal[3] = {r[1] * c[2] - r[2] * c[1], r[2] * c[0] - r[0] * c[2], r[0] * c[1] - r[1] * c[0]};
+  const double norm = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+  if (!(norm > 0.99 && norm < 1.01))
+    input_error(dir, "ImageOrientationPatient is not two perpendicular unit vectors", "fix the orientation tags or give a NIfTI");
+  for (double& x : normal) x /= norm;
+
+  std::vector<std::array<double, 3>> position(n);
+  std::vector<double> along(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::vector<double> p = decimals(scanned(scanner, files[i], kPosition), 3);
+    if (p.empty())
+      input_error(dir, file_name(files[i]) + " has no usable ImagePositionPatient (0020,0032), so its slice position is unknown",
+                  "give a complete PET DICOM series, or a NIfTI");
+    position[i] = {p[0], p[1], p[2]};
+    along[i] = p[0] * normal[0] + p[1] * normal[1] + p[2] * normal[2];
+  }
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return along[a] < along[b]; });
+  std::vector<double> d(n);
+  for (std::size_t i = 0; i < n; ++i) d[i] = along[order[i]];
+
+  // Duplicated positions (dynamic PET: every frame at the same slices), compared numerically so
+  // that positions written 0.001 mm apart are still one position.
+  const double mean_gap = (d[n - 1] - d[0]) / static_cast<double>(n - 1);
+  const double same_position = mean_gap > 0 ? std::min(0.05, 0.1 * mean_gap) : 0.05;
+  std::size_t distinct = 1;
+  for (std::size_t i = 1; i < n; ++i)
+    if (d[i] - d[i - 1] >= same_position) ++distinct;
+  if (distinct < n)
+    input_error(dir,
+                "series has " + std::to_string(n) + " files at only " + std::to_string(distinct) +
+                    " slice positions (dynamic, multi-frame PET)",
+                "convert it to a 4D NIfTI (e.g. dcm2niix) and choose a frame or sum the frames");
+
+  const double spacing = d[1] - d[0];
+  const double tolerance = std::max(0.01, 0.01 * spacing);  // DICOM positions are rounded decimals
+  // Gantry tilt: the slice origins must lie on the line through the first along the normal
+  // (plus 1e-4 of the distance, for orientation cosines written with few decimals).
+  const std::array<double, 3>& p0 = position[order[0]];
+  double worst = 0, worst_along = 0;
+  std::size_t worst_slice = 0;
+  bool tilted = false;
+  for (std::size_t i = 1; i < n; ++i) {
+    const std::array<double, 3>& p = position[order[i]];
+    double off[3];
+    for (int a = 0; a < 3; ++a) off[a] = p[a] - p0[a] - (d[i] - d[0]) * normal[a];
+    const double beside = std::sqrt(off[0] * off[0] + off[1] * off[1] + off[2] * off[2]);
+    tilted = tilted || beside > tolerance + 1e-4 * (d[i] - d[0]);
+    if (beside > worst) {
+      worst = beside;
+      worst_along = d[i] - d[0];
+      worst_slice = i;
+    }
+  }
+  if (tilted) {
+    char angle[32];
+    std::snprintf(angle, sizeof(angle), "%.1f", std::atan2(worst, worst_along) * (180.0 / 3.14159265358979323846));
+    input_error(dir,
+                "slices are not stacked along the orientation's normal: slice " + std::to_string(worst_slice + 1) + " of " +
+                    std::to_string(n) + " lies " + mm(worst) + " beside the normal through slice 1 (gantry tilt " + angle +
+                    " degrees?)",
+                "the grid would be sheared; resample it to a regular grid (e.g. dcm2niix corrects gantry tilt) and give the NIfTI");
+  }
+  // Uniform spacing along the normal.
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const double gap = d[i + 1] - d[i];
+    if (std::abs(gap - spacing) <= tolerance) continue;
+    const double big = std::max(gap, spacing), small = std::min(gap, spacing);
+    const double multiple = std::round(big / small);
+    const bool missing = multiple >= 2 && std::abs(big - multiple * small) <= multiple * tolerance;
+    input_error(dir,
+                "slice spacing is not uniform: " + mm(spacing) + ", then " + mm(gap) + " between slices " + std::to_string(i + 1) +
+                    " and " + std::to_string(i + 2) + " of " + std::to_string(n) + " (counted along the normal" +
+                    (missing ? "; a missing slice?)" : ")"),
+                "the slices cannot be stacked at one spacing; add the missing files or give a NIfTI on a regular grid");
+  }
+  std::vector<std::string> sorted(n);
+  for (std::size_t i = 0; i < n; ++i) sorted[i] = files[order[i]];
+  return sorted;
+}
+
 }  // namespace
 
 bool itk_is_dicom_directory(const std::string& directory) {
@@ -74,16 +262,29 @@ DicomSeries itk_read_dicom_series(const std::string& directory) {
     out.num_series = static_cast<int>(uids.size());
     if (uids.empty())
       input_error(directory, "folder holds no DICOM series GDCM can read", "give the folder with the PET DICOM files, or a NIfTI");
-    // Several series (e.g. CT + PET, or several reconstructions): take the one with the most files.
-    std::size_t best = 0;
+    std::vector<SeriesEntry> all;
+    std::vector<std::string> every_file;
     for (const std::string& uid : uids) {
-      const std::vector<std::string> f = names->GetFileNames(uid);
-      if (f.size() > best) {
-        best = f.size();
-        files = f;
-        out.series_uid = uid;
-      }
+      SeriesEntry s;
+      s.files = names->GetFileNames(uid);
+      if (s.files.empty()) continue;
+      every_file.insert(every_file.end(), s.files.begin(), s.files.end());
+      all.push_back(std::move(s));
     }
+    gdcm::Scanner scanner;
+    for (const gdcm::Tag& t : {kModality, kSeriesDescription, kSeriesUid, kPosition, kOrientation, kNumberOfFrames}) scanner.AddTag(t);
+    if (!scanner.Scan(every_file)) input_error(directory, "GDCM could not read the DICOM headers", "check the folder");
+    for (SeriesEntry& s : all) {
+      s.uid = scanned(scanner, s.files.front(), kSeriesUid);
+      s.description = scanned(scanner, s.files.front(), kSeriesDescription);
+      s.modality = scanned(scanner, s.files.front(), kModality);
+    }
+    const SeriesEntry chosen = choose_series(directory, std::move(all));
+    files = check_slice_stack(directory, chosen.files, scanner);
+    out.series_uid = chosen.uid;
+    out.series_description = chosen.description;
+    out.modality = chosen.modality;
+    out.num_files = static_cast<int>(chosen.files.size());
   } catch (const itk::ExceptionObject& e) {
     input_error(directory, "cannot list the DICOM files: " + one_line(e.GetDescription()), "check the folder");
   }
@@ -97,18 +298,6 @@ DicomSeries itk_read_dicom_series(const std::string& directory) {
   } catch (const itk::ExceptionObject& e) {
     input_error(directory, "GDCM could not read the series: " + one_line(e.GetDescription()), "the DICOM files are corrupt or not an image series");
   }
-  // Dynamic (4D) PET stores several frames at the same slice positions; the series reader would
-  // stack them into one wrong 3D volume, so detect that and refuse clearly.
-  std::set<std::string> positions;
-  const Reader::DictionaryArrayType* dicts = reader->GetMetaDataDictionaryArray();
-  if (dicts)
-    for (const auto* d : *dicts)
-      if (d) positions.insert(dict_string(*d, "0020|0032"));
-  if (!positions.empty() && positions.size() < files.size())
-    input_error(directory,
-                "series has " + std::to_string(files.size()) + " files at only " + std::to_string(positions.size()) +
-                    " slice positions (dynamic, multi-frame PET)",
-                "convert it to a 4D NIfTI (e.g. dcm2niix) and choose a frame or sum the frames");
 
   FloatImage::Pointer image = reader->GetOutput();
   const auto region = image->GetLargestPossibleRegion();
@@ -129,7 +318,7 @@ DicomSeries itk_read_dicom_series(const std::string& directory) {
   std::copy(image->GetBufferPointer(), image->GetBufferPointer() + out.data.size(), out.data.begin());
   const itk::MetaDataDictionary& dict = io->GetMetaDataDictionary();
   out.units = dict_string(dict, "0054|1001");
-  out.modality = dict_string(dict, "0008|0060");
+  if (out.modality.empty()) out.modality = dict_string(dict, "0008|0060");
   out.frames = 1;
   return out;
 }

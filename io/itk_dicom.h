@@ -15,13 +15,18 @@ struct DicomSeries {
   std::array<double, 16> vox2ras{};   // row-major 4x4, RAS (converted from DICOM's LPS)
   std::string units;                  // (0054,1001) Units, e.g. "BQML"
   std::string modality;               // (0008,0060)
-  std::string series_uid;
+  std::string series_uid;             // (0020,000e) of the series read
+  std::string series_description;     // (0008,103e)
+  int num_files = 0;                  // files of the series read
   int num_series = 0;                 // series found in the folder
 };
 
 // True when the folder holds at least one DICOM file GDCM can read.
 bool itk_is_dicom_directory(const std::string& directory);
-// Reads the largest series in the folder. Throws InputError naming the folder on failure.
+// Reads the one series of the folder: its PET series (Modality PT) when it has any, else its only
+// series; several candidates are refused with their list. Slice positions are checked along the
+// orientation's normal (duplicates, uneven spacing, gantry tilt refused). Throws InputError naming
+// the folder on failure.
 DicomSeries itk_read_dicom_series(const std::string& directory);
 // Writes one int16 file per slice with RescaleSlope/Intercept so the floats survive to 1/32000 of
 // their range. Throws std::runtime_error naming the folder on failure.

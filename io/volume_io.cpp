@@ -54,6 +54,9 @@ Volume read_dicom_series(const std::string& directory, const VolumeReadOptions& 
   v.dims = s.dims;
   v.source_path = directory;
   v.orientation_source = "dicom";
+  v.source_series = s.series_uid + " '" + (s.series_description.empty() ? std::string("no description") : s.series_description) +
+                    "' (" + (s.modality.empty() ? std::string("no modality") : s.modality) + ", " + std::to_string(s.num_files) +
+                    (s.num_files == 1 ? " file)" : " files)");
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c) v.vox2ras(r, c) = s.vox2ras[4 * r + c];
   check_affine(directory, v.vox2ras, "DICOM");

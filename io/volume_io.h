@@ -17,6 +17,7 @@ struct Volume {
   std::string orientation_source;            // "sform", "qform", "mgh", "dicom", ...
   std::string source_path;
   std::string units;                         // e.g. "Bq/mL" when known, else ""
+  std::string source_series;                 // DICOM: the series read, "UID 'description' (modality, N files)"
   std::size_t num_voxels() const { return static_cast<std::size_t>(dims[0]) * dims[1] * dims[2]; }
   float at(int i, int j, int k) const {
     return data[static_cast<std::size_t>(i) + static_cast<std::size_t>(dims[0]) * (j + static_cast<std::size_t>(dims[1]) * k)];
@@ -35,8 +36,9 @@ struct VolumeReadOptions {
   bool allow_map_grid = false;
 };
 
-// Reads NIfTI (.nii, .nii.gz), MGH/MGZ (.mgh, .mgz) or a DICOM series (a directory; the series with
-// the most files when there are several; ITK/GDCM, LPS converted to RAS). The affine is
+// Reads NIfTI (.nii, .nii.gz), MGH/MGZ (.mgh, .mgz) or a DICOM series (a directory holding one PET
+// series, or one series of any modality; several candidates, missing slices, uneven spacing, gantry
+// tilt and repeated positions are refused; ITK/GDCM, LPS converted to RAS). The affine is
 // the sform when its code is > 0, else the qform when > 0 (stated in orientation_source); a file
 // with neither is refused. A 4D file needs options.frame or options.sum_frames.
 Volume read_volume(const std::string& path, const VolumeReadOptions& options = {});

@@ -65,6 +65,34 @@ TEST(SampleCli, NormalProjectionWritesFuncWithValuesAtSegmentMidpointsAndAPng) {
   EXPECT_NE(text.find("reference-region"), std::string::npos);
 }
 
+TEST(SampleCli, DicomFolderRecordsTheSeriesReadAndRefusesTwoPetSeries) {
+  SampleFixture fx("sample_cli_dicom");
+  const io::Volume vol = io::read_volume(fx.pet);
+  io::write_dicom_series(fx.dir + "/dicom", vol);  // one PET series: read, and named in the output
+  std::string out;
+  ASSERT_EQ(test::run_command(test::authalic_binary() + " sample --trilinear " + fx.dir + "/dicom " + fx.surface + " " + fx.dir +
+                                  "/dicom.func.gii",
+                              &out),
+            0)
+      << out;
+  std::ifstream gii(fx.dir + "/dicom.func.gii");
+  const std::string text((std::istreambuf_iterator<char>(gii)), {});
+  EXPECT_NE(text.find("volume_series"), std::string::npos);
+  EXPECT_NE(text.find("'authalic test series' (PT, 40 files)"), std::string::npos);
+
+  // A second PET series (another reconstruction) beside it: refused, one line, nothing written.
+  io::write_dicom_series(fx.dir + "/second", vol);
+  for (const auto& e : std::filesystem::directory_iterator(fx.dir + "/second"))
+    std::filesystem::copy_file(e.path(), fx.dir + "/dicom/second_" + e.path().filename().string());
+  EXPECT_EQ(test::run_command(test::authalic_binary() + " sample --trilinear " + fx.dir + "/dicom " + fx.surface + " " + fx.dir +
+                                  "/two.func.gii",
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("holds 2 PET series, so which one to read is ambiguous"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(fx.dir + "/two.func.gii"));
+}
+
 TEST(SampleCli, BadInputsExitWithCode2AndSayWhy) {
   SampleFixture fx("sample_cli_bad");
   TriMesh far = fx.sphere;
