@@ -2,6 +2,7 @@
 #include "analysis/normative.h"
 
 #include <algorithm>
+#include <boost/math/distributions/students_t.hpp>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -594,6 +595,13 @@ Comparison compare_elements(const NormativeReference& ref, const ElementTable& p
   out.age_adjusted = options.use_age && age_model && std::isfinite(out.patient_age);
   if (options.use_age && age_model && !std::isfinite(out.patient_age))
     out.notes.push_back("the reference has an age model but the patient's age is unknown: z-scores are not age-adjusted");
+  if (out.age_adjusted) {  // a line is only known between the controls' ages
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const auto& s : ref.subjects) lo = std::min(lo, s.age), hi = std::max(hi, s.age);
+    if (out.patient_age < lo || out.patient_age > hi)
+      out.notes.push_back("the patient's age " + format_value(out.patient_age) + " is outside the controls' ages (" + format_value(lo) +
+                          "-" + format_value(hi) + " years): the age model extrapolates, and its expected values are less certain");
+  }
   if (options.use_age && ref.age_model && !age_model)
     out.notes.push_back(age_model_absent_reason(ref, options.age_model_min_controls) + ": no age model, z-scores are not age-adjusted");
   for (const auto& s : ref.subjects)
@@ -626,8 +634,13 @@ Comparison compare_elements(const NormativeReference& ref, const ElementTable& p
     out.sd[i] = sd;
   }
   std::vector<double> value(size);  // the patient's, in the reference's order (blocks x elements)
-  for (std::size_t i = 0; i < size; ++i)
+  for (std::size_t i = 0; i < size; ++i) {
     value[i] = patient.blocks[i / static_cast<std::size_t>(ne)].elements[i % static_cast<std::size_t>(ne)].value;
+    if (std::isfinite(value[i]) && std::abs(value[i]) > kMaxReferenceValue)  // as a reference refuses it
+      throw InputError((options.patient_name.empty() ? "patient " + patient.subject_id : options.patient_name) + ": element " +
+                       std::to_string(i % static_cast<std::size_t>(ne)) + " (" + ref.hemispheres[i / static_cast<std::size_t>(ne)] +
+                       ") has value " + format_value(value[i]) + ", beyond +-1e15: not a plausible PET value; check how the table was made");
+  }
   if (options.rescale) rescale_to_reference(out, value, options.threshold);
   for (std::size_t i = 0; i < size; ++i) {
     const double y = out.scale * value[i], expected = out.expected[i], sd = out.sd[i];
@@ -944,6 +957,14 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
   io::write_file_atomically(p.abnormal_csv, csv);
   io::write_file_atomically(p.summary_json, comparison_summary_json(ref, reference_path, patient, patient_path, cmp, p));
   return p;
+}
+
+double expected_abnormal_share(int controls, bool age_model, bool predictive, double threshold) {
+  const int df = controls - (age_model ? 2 : 1);
+  if (df < 1 || !(threshold > 0)) return std::nan("");
+  const double t = predictive ? threshold : threshold / std::sqrt(1.0 + 1.0 / controls);
+  const boost::math::students_t dist(df);
+  return 2.0 * boost::math::cdf(boost::math::complement(dist, t));
 }
 
 bool has_age_model(const NormativeReference& ref, int min_controls) {

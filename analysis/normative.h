@@ -122,6 +122,11 @@ inline constexpr int kMinAgeModelControls = 8;
 // with one less) and the ages differ (a slope needs a spread; controls all of one age give
 // age_m2 = 0 and no model).
 bool has_age_model(const NormativeReference& ref, int min_controls = kMinAgeModelControls);
+// The share of a healthy subject's elements expected at |z| >= threshold when element values are
+// normal among the controls: with the predictive SD, z follows Student's t with n - 1 degrees of
+// freedom (n - 2 with the age model); the plain SD's z is sqrt(1 + 1/n) times such a t (taking the
+// age term of the inflation as 0). E.g. 6 controls, threshold 2: 10.2 %; 20 controls: 6.0 %.
+double expected_abnormal_share(int controls, bool age_model, bool predictive, double threshold);
 // Why a reference with ages has no age model ("" when it has one or has no ages).
 std::string age_model_absent_reason(const NormativeReference& ref, int min_controls = kMinAgeModelControls);
 

@@ -368,7 +368,7 @@ json clusters_tsv_sidecar(double threshold) {
     if (!units.empty()) j["Units"] = units;
     return j;
   };
-  return {{"description", "clusters of abnormal elements: edge-adjacent elements of one sign with |z| >= " + std::to_string(threshold)},
+  return {{"description", "clusters of abnormal elements: touching elements (sharing an edge or a corner: 8 neighbours, not across the seam between hemispheres) of one sign with |z| >= " + std::to_string(threshold)},
           {"cluster", col("cluster number, largest first")},
           {"hemisphere", col("left or right")},
           {"direction", col("hypo (z <= -threshold) or hyper (z >= threshold)")},
@@ -593,10 +593,14 @@ ReportNormative report_normative(const NormativeReference& reference, const Subj
                                 "the same direction and at least the mass, sum of |z| - " + format_fixed(cmp.threshold, 1) +
                                 ") / (1 + controls); corrected for the number of elements and clusters looked at";
   n.chance_clusters_short = cmp.control_mass_hypo.empty()
-                                ? "p: not measured (the reference keeps no control values)"
+                                ? "p: not measured: " + cmp.chance_note
                                 : "p: against the largest chance cluster (mass: sum of |z| - " + format_fixed(cmp.threshold, 1) +
                                       ") of each of the " + std::to_string(cmp.control_mass_hypo.size()) +
                                       " controls, compared with the others";
+  n.age_adjusted = cmp.age_adjusted;
+  n.predictive = cmp.predictive;
+  n.rescaled = cmp.rescaled;
+  n.expected_abnormal_share = expected_abnormal_share(n.num_subjects, cmp.age_adjusted, cmp.predictive, options.z_threshold);
   if (cmp.rescaled) {
     char buf[160];
     std::snprintf(buf, sizeof(buf), "x %.4f, fitted on the %d elements with |z| < %.1f", cmp.scale, cmp.scale_elements,
@@ -847,7 +851,7 @@ ElementTable elements_step(Hemisphere (&hemis)[2], const SubjectInputs& in, cons
   ElementTable table;
   table.grid = element_grid(Domain::square(), options.k);
   table.normalisation = to_string(norm.kind);
-  table.units = norm.units.empty() ? pet_units : norm.units;
+  table.units = !norm.units.empty() ? norm.units : !pet_units.empty() ? pet_units : "PET units";  // as `sample` says it
   table.subject_id = in.id;
   table.age = in.age > 0 ? in.age : std::numeric_limits<double>::quiet_NaN();
   table.metadata["software"] = software_version();
@@ -1003,7 +1007,9 @@ void write_hemisphere_pet(const Hemisphere& h, const ElementTable& table, int K,
   const std::string pet_name = out.names.pet(h.tag);
   io::write_per_vertex((out.stage / pet_name).string(), h.pet, fo);
   out.spec.push_back({wo.anatomical_structure, "METRIC", pet_name});
-  out.sidecars.add(pet_name, {{"description", "PET per vertex (normal projection), normalised"}, {"units", table.units}});
+  out.sidecars.add(pet_name, {{"description", std::string("PET per vertex (normal projection)") +
+                                                  (table.normalisation == "none" ? ", not normalised" : ", normalised: " + table.normalisation)},
+                              {"units", table.units}});
   const std::string img_name = out.names.pet_elements(h.tag, ".nii.gz");
   write_element_nifti((out.stage / img_name).string(), element_image(h.elements.block, table.grid), table.grid, 1,
                       mean_element_area(h.elements.block), ElementImageKind::kValues, "authalic PET elements " + h.name);

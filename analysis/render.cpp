@@ -256,6 +256,9 @@ void check_mesh(const MatrixXd& V, const MatrixXi& F, const ScalarColouring& c, 
     throw std::invalid_argument(std::string(who) + ": " + std::to_string(c.values.size()) + " values for " +
                                 std::to_string(V.rows()) + " vertices");
   }
+  if (!c.no_value.empty() && c.no_value.size() != static_cast<std::size_t>(V.rows()))
+    throw std::invalid_argument(std::string(who) + ": " + std::to_string(c.no_value.size()) + " no-value flags for " +
+                                std::to_string(V.rows()) + " vertices");
   if (c.background.size() > 0 && c.background.size() != V.rows()) {
     throw std::invalid_argument(std::string(who) + ": " + std::to_string(c.background.size()) + " background levels for " +
                                 std::to_string(V.rows()) + " vertices");
@@ -276,6 +279,10 @@ Rgb pixel_colour(const ScalarColouring& c, const ColourTable& table, const int* 
     return kPlainSurface;
   }
   if (!table.hidden(v)) return table(v);
+  if (std::isnan(v) && !c.no_value.empty() && c.values.size() > 0) {
+    const int nearest = (w0 >= w1 && w0 >= w2) ? f[0] : (w1 >= w2 ? f[1] : f[2]);
+    if (c.no_value[static_cast<std::size_t>(nearest)]) return c.no_value_colour;
+  }
   if (c.background.size() == 0) return c.nan_colour;
   const auto g = to_byte(w0 * c.background[f[0]] + w1 * c.background[f[1]] + w2 * c.background[f[2]]);
   return {g, g, g};

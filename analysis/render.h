@@ -32,6 +32,10 @@ struct ScalarColouring {
   // Per vertex gray level in [0,1] shown where a value is not coloured (NaN or under the
   // threshold): sulcal shading. Empty: nan_colour.
   VectorXd background;
+  // Per vertex (#V, or empty): the vertex should have a value but has none (no PET there, or no z:
+  // too few controls): drawn in no_value_colour, so that it is not read as "within normal limits".
+  std::vector<char> no_value;
+  Rgb no_value_colour{235, 190, 60};
 };
 
 struct FlatRenderOptions {
@@ -110,6 +114,7 @@ struct HemisphereSurface {
   bool left = true;
   VectorXd values;     // per vertex, coloured through the figure's ScalarColouring
   VectorXd background; // per vertex gray level (sulcal shading), may be empty
+  std::vector<char> no_value;  // per vertex, may be empty: ScalarColouring::no_value
 };
 struct StandardViewsOptions {
   int panel_width = 280, panel_height = 220;

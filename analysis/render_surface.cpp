@@ -274,6 +274,9 @@ PanelMesh panel_mesh(const std::vector<const HemisphereSurface*>& parts, const S
   bool background = true;
   for (const HemisphereSurface* h : parts) background = background && h->background.size() == h->V.rows();
   m.colouring.background = background ? VectorXd(nv) : VectorXd();
+  bool no_value = false;
+  for (const HemisphereSurface* h : parts) no_value = no_value || !h->no_value.empty();
+  m.colouring.no_value.assign(no_value ? static_cast<std::size_t>(nv) : 0, 0);
   Eigen::Index ov = 0, of = 0;
   for (const HemisphereSurface* h : parts) {
     m.V.middleRows(ov, h->V.rows()) = h->V.leftCols(3);
@@ -281,6 +284,8 @@ PanelMesh panel_mesh(const std::vector<const HemisphereSurface*>& parts, const S
     if (h->F.rows() > 0) m.F.middleRows(of, h->F.rows()) = (h->F.array() + static_cast<int>(ov)).matrix();
     if (h->values.size() == h->V.rows()) m.colouring.values.segment(ov, h->V.rows()) = h->values;
     if (background) m.colouring.background.segment(ov, h->V.rows()) = h->background;
+    if (no_value && h->no_value.size() == static_cast<std::size_t>(h->V.rows()))
+      std::copy(h->no_value.begin(), h->no_value.end(), m.colouring.no_value.begin() + ov);
     ov += h->V.rows();
     of += h->F.rows();
   }

@@ -21,14 +21,30 @@ namespace {
 
 std::string fixed(double v, int decimals) { return format_fixed(v, decimals); }
 
-const char* kMethodText =
-    "z = (patient - mean of the controls) / SD, element by element (as NEUROSTAT / 3D-SSP compare a patient with a "
-    "normal database); the SD is the controls' SD widened by sqrt(1 + 1/n) for the uncertainty of a mean of n controls. "
-    "Before that, the patient's values are multiplied by the one factor that best fits the reference over the elements "
-    "found normal, so a focal loss, which lowers the global mean, does not make healthy cortex look hypermetabolic. It "
-    "assumes the controls are representative of the patient's population, were processed the same way (same map, same "
-    "K, same normalisation), and that element values are roughly normally distributed among them; with n controls a "
-    "healthy element still exceeds |z| = 2 in about 5-7% of cases.";
+// How z was computed, as this comparison computed it (the age model, the SD, the rescaling), and
+// what the t distribution predicts for a healthy subject with this many controls.
+std::string method_text(const ReportNormative& n) {
+  std::string t = n.age_adjusted
+                      ? "z = (patient - value expected at the patient's age) / SD, element by element: the expected value from a "
+                        "least-squares line in age through the controls' values, the SD that of the controls about the line"
+                      : "z = (patient - mean of the controls) / SD, element by element (as NEUROSTAT / 3D-SSP compare a patient "
+                        "with a normal database)";
+  if (n.predictive)
+    t += n.age_adjusted ? ", widened by sqrt(1 + 1/n + (age - mean age)^2 / sum of squared age deviations) for the uncertainty of "
+                          "the line fitted to n controls"
+                        : ", the SD widened by sqrt(1 + 1/n) for the uncertainty of a mean of n controls";
+  t += ". ";
+  if (n.rescaled)
+    t += "Before that, the patient's values are multiplied by the one factor that best fits the reference over the elements "
+         "found normal, so a focal loss, which lowers the global mean, does not make healthy cortex look hypermetabolic. ";
+  t += "It assumes the controls are representative of the patient's population, were processed the same way (same map, same "
+       "K, same normalisation), and that element values are roughly normally distributed among them";
+  if (std::isfinite(n.expected_abnormal_share))
+    t += "; then, with " + std::to_string(n.num_subjects) + " controls, a healthy element still reaches |z| >= " +
+         fixed(n.threshold, 1) + " in about " + fixed(100.0 * n.expected_abnormal_share, 1) +
+         " % of cases (Student's t distribution), which the clusters' p accounts for";
+  return t + ".";
+}
 
 const char* kStyle = R"(
 body { font-family: "DejaVu Sans", Helvetica, Arial, sans-serif; margin: 24px auto; max-width: 1160px; color: #1d1d1d; background: #fff; }
@@ -244,7 +260,7 @@ void normative_section(std::ostringstream& out, const ReportData& d) {
                                          fixed(d.normative.threshold, 1)});
     if (!d.normative.rescale.empty()) rows.push_back({"patient rescaled to the reference", d.normative.rescale});
     key_value_table(out, rows);
-    out << "<p>" << kMethodText << "</p>\n";
+    out << "<p>" << html_escape(method_text(d.normative)) << "</p>\n";
   } else {
     out << "<p class=\"muted\">None: run with a normative reference (built with <code>authalic normative build</code> from "
            "control subjects) to obtain z-scores.</p>\n";

@@ -78,6 +78,12 @@ struct ReportNormative {
   std::string description;       // free text: what the reference is, its file, its software version
   double threshold = 2.0;        // |z| flagged
   std::string rescale;           // the patient's rescaling to the reference (CompareOptions::rescale), "" = not shown
+  // How z was computed, for the method text: the age model, the predictive SD, the rescaling, and
+  // the share of a healthy subject's elements the t distribution puts beyond the threshold.
+  bool age_adjusted = false;
+  bool predictive = true;
+  bool rescaled = false;
+  double expected_abnormal_share = std::numeric_limits<double>::quiet_NaN();
   std::string age_range;         // e.g. "55-78 years"
   std::string correspondence;    // how patient and controls correspond, e.g. "the same K x K square elements"
   int min_cluster_elements = 1;  // clusters smaller than this are not reported

@@ -53,8 +53,14 @@ std::vector<HemisphereSurface> view_surfaces(const ReportData& d, bool z) {
   for (const ReportHemisphere& h : d.hemispheres) {
     const MatrixXi& F = h.surface_F.rows() > 0 ? h.surface_F : h.faces;
     if (h.surface_V.rows() == 0 || F.rows() == 0) continue;
-    HemisphereSurface s{h.surface_V, F, h.left, on_surface(h, z ? report_vertex_z(h) : h.pet), h.shading};
+    HemisphereSurface s{h.surface_V, F, h.left, on_surface(h, z ? report_vertex_z(h) : h.pet), h.shading, {}};
     if (s.background.size() != s.V.rows()) s.background = VectorXd::Constant(s.V.rows(), 0.7);
+    // Cortex without a value (no PET there, or no z) is marked, not shaded as normal cortex.
+    if (h.element_of_vertex.size() == s.V.rows()) {
+      s.no_value.assign(static_cast<std::size_t>(s.V.rows()), 0);
+      for (Eigen::Index v = 0; v < s.V.rows(); ++v)
+        s.no_value[static_cast<std::size_t>(v)] = h.element_of_vertex(v) >= 0 && !std::isfinite(s.values(v));
+    }
     out.push_back(std::move(s));
   }
   return out;
@@ -74,7 +80,8 @@ void standard_view_figures(const ReportData& d, ReportFigures& f) {
     o.title = "z-score, |z| \u2265 " + format_fixed(threshold, 1) + " (blue: lower than the controls)";
     f.views.push_back({render_standard_views(z, z_colouring(VectorXd(), threshold), o), "eight standard views of z",
                        "z of each equal-area element on the subject's pial surface, shown where |z| \u2265 " +
-                           format_fixed(threshold, 1) + "; grey: within normal limits (shaded by sulcal depth: darker in sulci)."});
+                           format_fixed(threshold, 1) + "; grey: within normal limits (shaded by sulcal depth: darker in sulci); " +
+                           "amber: cortex without a z (no PET value there, or too few controls)."});
   }
   std::vector<HemisphereSurface> pet = view_surfaces(d, false);
   VectorXd all(0);
@@ -86,7 +93,8 @@ void standard_view_figures(const ReportData& d, ReportFigures& f) {
   if (!pet.empty() && all.array().isFinite().any()) {
     o.title = "PET (" + d.pet_units + ")";
     f.views.push_back({render_standard_views(pet, pet_colouring(all, d.pet_units), o), "eight standard views of PET",
-                       "Normalised PET sampled on the cortex (2nd-98th percentile colour range); grey: outside the cortex."});
+                       "Normalised PET sampled on the cortex (2nd-98th percentile colour range); grey: outside the cortex; "
+                       "amber: cortex without a PET value (outside the field of view)."});
   }
 }
 

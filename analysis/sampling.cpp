@@ -253,7 +253,9 @@ SamplingResult sample_normal_projection(const io::Volume& volume, const MatrixXd
   check_field_of_view(volume, V_world, used, options, r);
 
   const double max_step = default_step(volume, options);
-  const int intervals = options.depth_mm > 0 ? std::max(1, static_cast<int>(std::ceil(options.depth_mm / max_step - 1e-9))) : 0;
+  // The tolerance absorbs a voxel size stored in single precision (1.9999999 mm made 11 intervals
+  // of 0.909 mm where 10 of 1 mm were meant).
+  const int intervals = options.depth_mm > 0 ? std::max(1, static_cast<int>(std::ceil(options.depth_mm / max_step - 1e-6))) : 0;
   r.step_mm = intervals > 0 ? options.depth_mm / intervals : 0.0;
   r.samples_per_vertex = intervals + 1;
 
@@ -329,7 +331,7 @@ SamplingResult sample_ribbon(const io::Volume& volume, const MatrixXd& white_wor
     const Eigen::Vector3d a = white_world.row(v).head<3>().transpose();
     const Eigen::Vector3d b = pial_world.row(v).head<3>().transpose();
     const double length = (b - a).norm();
-    const int intervals = std::max(min_intervals, static_cast<int>(std::ceil(length / max_step - 1e-9)));
+    const int intervals = std::max(min_intervals, static_cast<int>(std::ceil(length / max_step - 1e-6)));
     const Eigen::Vector3d ia = sampler.to_index(a), ib = sampler.to_index(b);
     SegmentStat s{options.statistic};
     for (int k = 0; k <= intervals; ++k) {

@@ -232,7 +232,9 @@ const bool registered = register_command({50, [](CLI::App& parent) {
   compare->add_option("REFERENCE", c->reference, "Normative reference (.json)")->required();
   compare->add_option("PATIENT", c->patient, "Patient's element table (.tsv or .csv with its .json sidecar)")->required();
   compare->add_option("OUT_PREFIX", c->prefix, "Output prefix")->required();
-  compare->add_option("--threshold", c->threshold, "|z| at or beyond which an element is abnormal")->capture_default_str();
+  compare->add_option("--threshold", c->threshold, "|z| at or beyond which an element is abnormal")
+      ->check(in_range(0.5, 10))
+      ->capture_default_str();
   compare->add_option("--labels", c->labels,
                       "Element label file(s) (.label.gii from `authalic elements`), one per hemisphere block in the "
                       "reference's order, for per-vertex z");

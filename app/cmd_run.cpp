@@ -158,7 +158,8 @@ const bool registered = register_command({70, [](CLI::App& parent) {
       ->check(in_range(0.0, 50.0));
   sub->add_option("--normalize", a->options.normalize,
                   "Intensity normalisation: none, global (cortical mean), or a reference-region mask NIfTI (SUVR)");
-  sub->add_option("--threshold", a->options.z_threshold, "|z| at or beyond which an element is abnormal (default 2)");
+  sub->add_option("--threshold", a->options.z_threshold, "|z| at or beyond which an element is abnormal (default 2)")
+      ->check(in_range(0.5, 10));
   sub->add_flag("--no-rescale", [a](std::int64_t) { a->options.rescale = false; },
                 "Compare the globally normalised values as they are, without rescaling the subject to the reference "
                 "over its normal elements (see `authalic normative compare --help`)");

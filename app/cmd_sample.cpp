@@ -85,7 +85,11 @@ struct SurfaceToVolume {
 SurfaceToVolume surface_to_volume(const SampleArgs& a, const io::Surface& surface, const io::Volume& volume) {
   SurfaceToVolume s;
   s.T = surface.to_scanner;
-  s.source = surface.has_volume_geometry ? "FreeSurfer footer (tkregister RAS + c_ras)" : "identity (surface in scanner RAS)";
+  s.source = surface.has_volume_geometry ? "FreeSurfer footer (tkregister RAS + c_ras)"
+             : surface.format == "freesurfer"
+                 ? "identity: a FreeSurfer surface (tkregister RAS) without a valid volume-geometry footer, taken as scanner RAS "
+                   "(c_ras unknown, assumed 0)"
+                 : "identity (surface in scanner RAS)";
   if (!a.surface_to_volume.empty()) {
     std::ifstream in(a.surface_to_volume);
     if (!in) throw InputError(a.surface_to_volume + ": cannot read the surface-to-volume matrix");
@@ -227,6 +231,9 @@ int run_sample(const SampleArgs& a) {
   const auto sampling_start = std::chrono::steady_clock::now();
   const std::clock_t sampling_cpu_start = std::clock();
   analysis::SamplingResult result = sample_volume(a, volume, V_world, surface.mesh.F, to_volume);
+  if (surface.format == "freesurfer" && !surface.has_volume_geometry && a.surface_to_volume.empty() && a.register_t1.empty())
+    result.notes.push_back(a.surface + " is a FreeSurfer surface (tkregister RAS) without a valid volume-geometry footer: its c_ras "
+                           "is unknown and taken as 0; if the subject's orig.mgz has another c_ras, give --surface-to-volume");
   const double sampling_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sampling_start).count();
   // CPU time of all threads: the step's cost on an idle machine, whatever the load of a shared one.
   const double sampling_cpu_seconds = double(std::clock() - sampling_cpu_start) / CLOCKS_PER_SEC;

@@ -9,6 +9,7 @@ PACKAGES=(
   libopenblas0-serial                      # the BLAS under CHOLMOD's supernodal factorisations (20k+ unknowns); serial: no threads
   libnifti2-dev libgiftiio-dev zlib1g-dev libpng-dev libssl-dev libexpat1-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev libcsv-dev
+  libboost-dev                             # Boost.Math (header-only): the t distribution of healthy z-scores
   python3 python3-nibabel python3-numpy python3-scipy
   python3-vtk9                             # scripts/mesh_families.py: voxelised and decimated surfaces (tests, bench)
   clang libclang-rt-14-dev libomp-dev      # libFuzzer targets (scripts/fuzz.sh), ThreadSanitizer

@@ -282,6 +282,46 @@ TEST(Normative, AgeModelEqualsDirectLeastSquaresFit) {
   EXPECT_TRUE(has_age_model(build_from(tables, 0, kMinAgeModelControls)));
 }
 
+// A patient older or younger than every control: the line extrapolates, and the comparison says
+// so. A patient value no reference could hold (|value| > 1e15) is refused as build refuses it.
+TEST(Normative, ExtrapolatedAgeIsNotedAndImplausibleValuesRefused) {
+  const auto tables = cohort(15, true);
+  const NormativeReference ref = build_from(tables, 0, 15);
+  ElementTable patient = tables[0];
+  patient.subject_id = "p";
+  double oldest = 0;
+  for (const auto& t : tables) oldest = std::max(oldest, t.age);
+  CompareOptions o;
+  o.age = oldest + 10;
+  const Comparison c = compare_to_reference(ref, patient, o);
+  ASSERT_TRUE(c.age_adjusted);
+  bool noted = false;
+  for (const auto& n : c.notes) noted = noted || n.find("is outside the controls' ages") != std::string::npos;
+  EXPECT_TRUE(noted);
+  o.age = oldest;
+  for (const auto& n : compare_to_reference(ref, patient, o).notes) EXPECT_EQ(n.find("outside the controls' ages"), std::string::npos) << n;
+  patient.blocks[0].elements[3].value = 1e300;
+  o.patient_name = "p.tsv";
+  try {
+    compare_to_reference(ref, patient, o);
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("p.tsv: element 3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("beyond +-1e15"), std::string::npos) << e.what();
+  }
+}
+
+// The share of a healthy subject's elements beyond |z| >= 2 is Student's t tail (known values:
+// 2 P(T_5 >= 2) = 0.101939, 2 P(T_19 >= 2) = 0.060002, 2 P(T_4 >= 2) = 0.116117 (scipy)).
+TEST(Normative, ExpectedAbnormalShareIsTheTDistributionsTail) {
+  EXPECT_NEAR(expected_abnormal_share(6, false, true, 2.0), 0.101939, 1e-6);
+  EXPECT_NEAR(expected_abnormal_share(20, false, true, 2.0), 0.060002, 1e-6);
+  EXPECT_NEAR(expected_abnormal_share(6, true, true, 2.0), 0.116117, 1e-6);  // the age model: n - 2 df
+  // The plain SD: z / sqrt(1 + 1/n) is the t; its tail at 2 / sqrt(1 + 1/20).
+  EXPECT_NEAR(expected_abnormal_share(20, false, false, 2.0), expected_abnormal_share(20, false, true, 2.0 / std::sqrt(1.05)), 1e-12);
+  EXPECT_TRUE(std::isnan(expected_abnormal_share(1, false, true, 2.0)));
+}
+
 // Leaving a control out by undoing its Welford update (for the chance clusters) gives the
 // reference built without it, age model included, and the values travel with the subjects through
 // the file, merges and leave-one-out.

@@ -421,6 +421,38 @@ TEST(RenderStandardViews, EightPanelsThresholdedOverGreyAndOneScale) {
   EXPECT_THROW(an::render_standard_views({}, c, o), std::invalid_argument);
 }
 
+// Cortex without a value (no PET there, or no z) is drawn in its own colour: grey read as
+// "within normal limits".
+TEST(RenderStandardViews, CortexWithoutAValueIsMarkedNotShadedAsNormal) {
+  an::HemisphereSurface left, right;
+  plane_grid(21, &left.V, &left.F);
+  right.V = left.V;
+  left.V.col(0).array() -= 30.0;
+  right.V.col(0).array() += 30.0;
+  right.left = false;
+  left.values = VectorXd::Zero(left.V.rows());
+  for (Eigen::Index v = 0; v < left.V.rows(); ++v)
+    if (left.V(v, 1) > 0) left.values(v) = std::nan("");  // the anterior half has no value
+  right.values = VectorXd::Zero(right.V.rows());
+  left.background = right.background = VectorXd::Constant(left.V.rows(), 0.5);
+  an::ScalarColouring c;
+  c.colormap = "coolwarm";
+  c.vmin = -5;
+  c.vmax = 5;
+  c.threshold = 2;
+  an::StandardViewsOptions o;
+  auto amber = [&](const RgbImage& img) {
+    long n = 0;
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x) n += pixel(img, x, y) == c.no_value_colour;
+    return n;
+  };
+  EXPECT_EQ(amber(an::render_standard_views({left, right}, c, o)), 0) << "without the flags: grey, as before";
+  left.no_value.assign(static_cast<std::size_t>(left.V.rows()), 0);
+  for (Eigen::Index v = 0; v < left.V.rows(); ++v) left.no_value[static_cast<std::size_t>(v)] = std::isnan(left.values(v));
+  EXPECT_GT(amber(an::render_standard_views({left, right}, c, o)), 1000);
+}
+
 TEST(RenderHistograms, BarHeightsFollowTheCounts) {
   std::vector<double> s(40, 0.0);
   for (int i = 10; i < 40; ++i) s[i] = 1.0;  // 10 zeros, 30 ones

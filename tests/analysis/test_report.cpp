@@ -8,6 +8,7 @@
 #include <set>
 #include <sstream>
 
+#include "analysis/normative.h"
 #include "analysis/report.h"
 #include "io/base64.h"
 #include "common/test_data.h"
@@ -258,6 +259,28 @@ TEST(Report, WellFormedSelfContainedWithAllSections) {
   for (std::size_t p = html.find("<tr>", clusters); p < end; p = html.find("<tr>", p + 1)) ++rows;
   EXPECT_EQ(rows, 3);
   EXPECT_NE(html.find("control subjects (n)</th><td>20"), std::string::npos);
+}
+
+// The method text says how this comparison computed z (it was one fixed text: mean and SD,
+// rescaled, "5-7 %", also for age-adjusted z and --no-rescale), and what the t distribution
+// predicts for a healthy subject with this many controls.
+TEST(Report, MethodTextDescribesTheComparisonMade) {
+  an::ReportData d = example_report(true);
+  d.normative.age_adjusted = false;
+  d.normative.rescaled = false;
+  d.normative.expected_abnormal_share = an::expected_abnormal_share(20, false, true, 2.0);
+  std::string html = an::report_html(d);
+  EXPECT_NE(html.find("z = (patient - mean of the controls) / SD"), std::string::npos);
+  EXPECT_EQ(html.find("multiplied by the one factor"), std::string::npos);
+  EXPECT_NE(html.find("with 20 controls, a healthy element still reaches |z| &gt;= 2.0 in about 6.0 %"), std::string::npos);
+  d.normative.age_adjusted = true;
+  d.normative.rescaled = true;
+  d.normative.num_subjects = 6;
+  d.normative.expected_abnormal_share = an::expected_abnormal_share(6, true, true, 2.0);
+  html = an::report_html(d);
+  EXPECT_NE(html.find("value expected at the patient"), std::string::npos);
+  EXPECT_NE(html.find("multiplied by the one factor"), std::string::npos);
+  EXPECT_NE(html.find("with 6 controls, a healthy element still reaches |z| &gt;= 2.0 in about 11.6 %"), std::string::npos);
 }
 
 TEST(Report, EmbeddedImagesDecodeAsPng) {

@@ -258,6 +258,12 @@ TEST(ReliabilityCli, SmallCommandsDoWhatTheirHelpSays) {
   EXPECT_EQ(failed.at("exit_code"), 2);
   EXPECT_EQ(failed.at("kind"), "bad input");
   EXPECT_NE(failed.at("error").get<std::string>().find("--range: LO must be below HI"), std::string::npos) << out;
+  // The threshold of z is checked the same way by run, group and compare, before any work (compare
+  // took inf and 1e9; run refused 0 only after mapping).
+  for (const std::string& cmd : std::vector<std::string>{" normative compare a.json b.tsv o", " run --id x --out " + q(dir + "/never")})
+    for (const char* t : {"inf", "0", "1e9"})
+      expect_refused(bin() + cmd + " --threshold " + t, "--threshold: '" + std::string(t) + "' is not a number from 0.5 to 10", {});
+  EXPECT_FALSE(fs::exists(dir + "/never"));
   EXPECT_EQ(test::run_command(bin() + " render --json", &out), 2);
   ASSERT_NE(out.find('{'), std::string::npos) << out;
   EXPECT_EQ(nlohmann::json::parse(out.substr(out.find('{'))).at("kind"), "usage");
