@@ -456,6 +456,9 @@ void run(const FlattenArgs& a) {
   io::check_file_roles({a.surface, a.faces_from, a.label, a.patch, a.density, a.shading, a.sphere_reg, a.atlas_surface,
                         a.atlas_sphere, a.atlas_label, a.atlas_faces_from},
                        {a.out, a.uv, a.initial, a.fs_patch, a.metrics, a.png, a.histogram});
+  require_gifti_map_output(a.out, "OUT");
+  require_gifti_map_output(a.uv, "--uv");
+  require_gifti_map_output(a.initial, "--initial");
   const io::Surface surface = io::read_surface(a.surface);
   const TriMesh& mesh = surface.mesh;
   for (const std::string& per_vertex : {a.faces_from, a.label, a.patch, a.density, a.shading})

@@ -450,6 +450,7 @@ void setup(CLI::App& parent) {
     if (a->surface.empty() && a->lh.empty()) throw InputError("rectangle: give --surface S, or --lh S --rh S (see --help)");
     io::check_file_roles({a->surface, a->lh, a->rh, a->lh_faces, a->rh_faces, a->lh_cortex, a->rh_cortex, a->sulc, a->lh_sulc, a->rh_sulc}, output_paths(*a));
     if (!a->surface.empty()) {
+      require_gifti_map_output(a->out, "OUT");
       run_one_surface(*a);
     } else {
       run_two_hemispheres(*a);

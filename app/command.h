@@ -34,6 +34,10 @@ GlobalOptions& global_options();
 // Validator for a number in [lo, hi], with the bounds printed as written ("0.05 to 10", not
 // CLI::Range's "0.050000 to 10.000000"); NaN and trailing characters are refused.
 CLI::Validator in_range(double lo, double hi);
+// Throws InputError unless `path` (when given) names a GIFTI file (.gii): a map's metadata records
+// the vertices it appended (corner splits, a cut's copies), which other surface formats drop, and
+// `metrics` and `elements` then misplace them. `option` names the output ("OUT", "--uv").
+void require_gifti_map_output(const std::string& path, const std::string& option);
 // The --k option of every subcommand that builds an element grid: the grid of each domain in
 // `kinds` is Domain::element_cols(K) x K (core/domain.h), which the help states; [lo, hi] is the
 // command's range (its tables and images grow with K^2).

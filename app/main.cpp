@@ -70,6 +70,15 @@ CLI::Validator in_range(double lo, double hi) {
       "[" + range + "]");
 }
 
+void require_gifti_map_output(const std::string& path, const std::string& option) {
+  if (path.empty()) return;
+  std::string lower = path;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (lower.size() >= 4 && lower.compare(lower.size() - 4, 4, ".gii") == 0) return;
+  throw InputError(option + " " + path + ": a map is written as GIFTI, whose metadata records the vertices it appended (other "
+                   "formats drop that record, and `metrics` and `elements` then misplace them); give a name ending in .surf.gii");
+}
+
 CLI::Option* add_k_option(CLI::App& sub, int& k, const std::vector<DomainKind>& kinds, int lo, int hi) {
   std::string grids;
   for (const DomainKind kind : kinds) {

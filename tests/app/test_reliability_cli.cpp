@@ -258,6 +258,12 @@ TEST(ReliabilityCli, SmallCommandsDoWhatTheirHelpSays) {
   EXPECT_EQ(failed.at("exit_code"), 2);
   EXPECT_EQ(failed.at("kind"), "bad input");
   EXPECT_NE(failed.at("error").get<std::string>().find("--range: LO must be below HI"), std::string::npos) << out;
+  // A map output in another format than GIFTI would drop the record of the appended vertices
+  // (`rectangle --surface out/r` wrote a FreeSurfer binary, and `metrics` then gave CV 0.0149 for 0.0096).
+  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/flat_noext"), "OUT " + dir + "/flat_noext: a map is written as GIFTI", {});
+  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/f.surf.gii") + " --uv " + q(dir + "/uv.vtk"), "--uv " + dir + "/uv.vtk: a map is written as GIFTI", {});
+  EXPECT_FALSE(fs::exists(dir + "/flat_noext"));
+  EXPECT_FALSE(fs::exists(dir + "/f.surf.gii"));
   // The threshold of z is checked the same way by run, group and compare, before any work (compare
   // took inf and 1e9; run refused 0 only after mapping).
   for (const std::string& cmd : std::vector<std::string>{" normative compare a.json b.tsv o", " run --id x --out " + q(dir + "/never")})
