@@ -315,6 +315,7 @@ io::RgbImage render_standard_views(const std::vector<HemisphereSurface>& hemisph
   // One scale for every panel, so sizes compare across views.
   std::vector<PanelCamera> cams(8);
   std::vector<const PanelMesh*> meshes(8, nullptr);
+  std::vector<double> half_width(8, 0.0);  // mm, the mesh's projected half width in each panel
   double scale = std::numeric_limits<double>::infinity();
   for (int i = 0; i < 8; ++i) {
     const StandardPanel& p = kStandardPanels[i];
@@ -327,6 +328,7 @@ io::RgbImage render_standard_views(const std::vector<HemisphereSurface>& hemisph
     const Eigen::Vector2d ext = (hi - lo).cwiseMax(1e-9);
     scale = std::min({scale, (W - 2.0 * m) / ext.x(), (H - 2.0 * m) / ext.y()});
     cams[i].centre = 0.5 * (lo + hi);
+    half_width[i] = 0.5 * ext.x();
   }
   const Saturation sat = saturation_of_values(whole.colouring);
   const int bar_extent = colour_bar_extent(colouring, sat, font) + m;
@@ -353,6 +355,18 @@ io::RgbImage render_standard_views(const std::vector<HemisphereSurface>& hemisph
     cams[i].height = H;
     std::vector<double> zbuf;
     cv.image(rasterise_panel(meshes[i]->V, meshes[i]->F, meshes[i]->N, meshes[i]->colouring, table, cams[i], zbuf), x, y + caption);
+    // Views of both hemispheres from above, below, the front or the back show the subject's right
+    // on one side or the other: mark the sides (the physician must not have to work it out).
+    if (kStandardPanels[i].only < 0) {
+      const bool right_on_right = cams[i].basis.right.x() > 0;
+      const double gap = half_width[i] * scale + 6.0;  // pixels from the panel's centre to just beside the brain
+      TextStyle mark = ts;
+      mark.bold = true;
+      mark.align = Align::Right;
+      cv.text(std::max(x + W / 2.0 - gap, x + font), y + caption + H / 2.0, right_on_right ? "L" : "R", mark);
+      mark.align = Align::Left;
+      cv.text(std::min(x + W / 2.0 + gap, x + W - font), y + caption + H / 2.0, right_on_right ? "R" : "L", mark);
+    }
   }
   draw_colour_bar(cv, 4 * W, top + H / 4.0, 2 * H - H / 2.0, colouring, sat, font);
   return cv.to_image();
