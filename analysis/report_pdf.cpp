@@ -43,6 +43,27 @@ void heading(Page& p, const std::string& text) {
   p.y += 4;
 }
 
+// Height of a paragraph (Canvas::paragraph's pitch), measured without drawing.
+double paragraph_height(double w, const std::string& text, double size) {
+  return static_cast<double>(wrap_text(text, size, w).size()) * 1.3 * size;
+}
+
+// Height key_values will use, measured without drawing.
+double key_values_height(double w, const KeyValues& rows) {
+  const double pitch = text_line_height(kBody) + 1.5;
+  double key_width = 0;
+  for (const auto& [k, v] : rows) key_width = std::max(key_width, text_width(k, kBody));
+  key_width = std::min(key_width + 8, 0.45 * w);
+  double used = 0;
+  for (const auto& [k, v] : rows) used += std::max(pitch, paragraph_height(w - key_width, v, kBody));
+  return used;
+}
+
+double heading_height() { return 6 + text_line_height(11.5) + 1 + 4; }
+
+// The page's last line of text may end here: the footer ("... page 2 of 2") starts 24 pt above the bottom.
+constexpr double kFooterTop = kPageHeight - 30.0;
+
 // Key-value rows in two columns (keys in grey) starting at x, width w; returns the height used.
 double key_values(Canvas& cv, double x, double y, double w, const KeyValues& rows) {
   const double pitch = text_line_height(kBody) + 1.5;
@@ -146,8 +167,20 @@ void second_page(Page& p, const ReportData& d, const ReportFigures& f) {
                                                     " elements with |z| \u2265 " + format_fixed(d.normative.threshold, 1) + ".",
                           style(kBody));
   } else {
+    // Room for the rest of the page (the lobe table, flat maps of at least 120 pt, quality, the
+    // disclaimer) decides how many cluster rows fit; the others are in the HTML and the TSV.
+    const double half = p.width / 2 - 8, pitch = text_line_height(kBody) + 2;
+    const std::size_t lobes = lobe_rows(d).size();
+    const double lobe_table = 1 + std::min<std::size_t>(lobes, 10) + (lobes > 10 ? 1 : 0);  // header, rows, "... more"
+    const double rest = (d.regions.empty() ? 0.0 : heading_height() + lobe_table * pitch) + heading_height() + 120 + 4 + heading_height() +
+                        std::max(key_values_height(half, d.quality), key_values_height(half, d.parameters)) + 6 +
+                        paragraph_height(p.width, kReportDisclaimer, 8.5) +
+                        paragraph_height(p.width, d.normative.chance_clusters_short + ".", 8.5) +
+                        (d.region_method.empty() ? 0.0 : paragraph_height(p.width, "Regions: " + d.region_method + ".", 8.5));
+    const double room = kFooterTop - p.y - rest - 2 * pitch;
+    const std::size_t rows = static_cast<std::size_t>(std::clamp(std::floor(room / pitch), 3.0, 12.0));
     table(p, {"#", "side", "type", "region", "peak region", "elements", "mm\u00b2", "peak z", "mean z", "p"}, cluster_rows(d),
-          {0.04, 0.06, 0.07, 0.2, 0.2, 0.1, 0.08, 0.08, 0.08, 0.09}, 12, beyond_chance(d));
+          {0.04, 0.06, 0.07, 0.2, 0.2, 0.1, 0.08, 0.08, 0.08, 0.09}, rows, beyond_chance(d));
     if (!d.normative.chance_clusters_short.empty())
       p.y += p.cv.paragraph(p.left, p.y, p.width, d.normative.chance_clusters_short + ".", style(8.5, false, kGrey));
   }
@@ -161,12 +194,17 @@ void second_page(Page& p, const ReportData& d, const ReportFigures& f) {
   // all, and the rectangle).
   const bool z = d.normative.present;
   const double cell = p.width / 2;
+  // The flat maps take what the quality table and the disclaimer leave (at most 200 pt).
+  const double half_width = p.width / 2 - 8;
+  const double after = heading_height() + std::max(key_values_height(half_width, d.quality), key_values_height(half_width, d.parameters)) +
+                       6 + paragraph_height(p.width, kReportDisclaimer, 8.5);
+  const double map_height = std::clamp(kFooterTop - p.y - after - 4, 60.0, 200.0);
   int k = 0;
   double row_height = 0;
   for (const ReportFigure& fig : f.flat_maps) {
     const bool square = fig.alt.find("rectangle") == std::string::npos;
     if (!square || k == 2 || (fig.alt.find("z-score") != std::string::npos) != z) continue;
-    const double scale = std::min((cell - 6) / fig.image.width, 200.0 / fig.image.height);
+    const double scale = std::min((cell - 6) / fig.image.width, map_height / fig.image.height);
     p.cv.image(fig.image, p.left + k * cell, p.y, scale);
     row_height = std::max(row_height, fig.image.height * scale);
     ++k;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>
@@ -369,6 +370,32 @@ TEST(ReportPdf, TwoA4PagesThatPopplerRenders) {
   // Same data, same bytes (no creation date).
   an::write_report_pdf(dir + "/again.pdf", d);
   EXPECT_EQ(authalic::test::run_command("cmp " + dir + "/report.pdf " + dir + "/again.pdf"), 0);
+  // Many clusters: page 2 still ends with the whole disclaimer above its footer (16 clusters
+  // pushed the disclaimer off the page and the footer over the quality rows).
+  const an::ReportCluster first = d.clusters.front();
+  d.clusters.assign(16, first);
+  for (int i = 0; i < 16; ++i) d.clusters[static_cast<std::size_t>(i)].id = i + 1;
+  for (const char* lobe : {"frontal", "temporal", "occipital", "insula", "cingulate", "limbic"})
+    for (const char* side : {"left", "right"}) d.regions.push_back({side, lobe, "", 40, -0.5});
+  for (int i = 0; i < 4; ++i)  // as many quality and processing rows as `run` writes, as long
+    d.quality.push_back({"quality row " + std::to_string(i), "0.0 % of the cortex's vertices outside the PET's field of view, 0 without a value"});
+  for (int i = 0; i < 6; ++i)
+    d.parameters.push_back({"parameter " + std::to_string(i), "normal projection, inward (inverse normal), depth 10 mm, step 1.429 mm, 8 samples"});
+  an::write_report_pdf(dir + "/many.pdf", d);
+  ASSERT_EQ(authalic::test::run_command("pdftotext -f 2 -l 2 -bbox " + dir + "/many.pdf " + dir + "/many.html", &out), 0) << out;
+  std::ifstream in(dir + "/many.html");
+  const std::string words((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto y_of = [&](const std::string& word, const char* edge) {  // the last occurrence's yMin/yMax
+    const std::size_t w = words.rfind(">" + word + "</word>");
+    if (w == std::string::npos) return -1.0;
+    const std::size_t a = words.rfind(std::string(edge) + "=\"", w);
+    return std::stod(words.substr(a + std::string(edge).size() + 2));
+  };
+  const double disclaimer_end = y_of("findings.", "yMax"), footer = y_of("page", "yMin");
+  ASSERT_GT(disclaimer_end, 0) << "the disclaimer is not on page 2";
+  ASSERT_GT(footer, 0);
+  EXPECT_LT(disclaimer_end, footer) << "the footer overprints the disclaimer";
+  EXPECT_LT(disclaimer_end, 841.89 - 24) << "the disclaimer runs off the page";
 }
 
 // The interactive view as headless Chromium runs it, offline (WebGL2 through SwiftShader): the
