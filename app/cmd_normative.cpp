@@ -105,7 +105,7 @@ int run_merge(const MergeArgs& a) {
   io::check_file_roles(a.inputs, {a.out});
   analysis::NormativeReference r = analysis::read_reference(a.inputs[0]);
   for (std::size_t i = 1; i < a.inputs.size(); ++i)
-    r = analysis::merge_references(r, analysis::read_reference(a.inputs[i]), "the merged references", a.inputs[i]);
+    r = analysis::merge_references(r, analysis::read_reference(a.inputs[i]), "the references merged so far", a.inputs[i]);
   r.partial = a.partial;
   if (!a.partial) analysis::check_reference_usable(r, a.out);
   analysis::write_reference(a.out, r);

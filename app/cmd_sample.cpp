@@ -177,6 +177,9 @@ void write_sampled_values(const SampleArgs& a, const io::Volume& volume, const s
                  {"normalisation_reference_value", std::to_string(norm.reference_value)},
                  {"units", norm.units}};
   if (!volume.source_series.empty()) fo.metadata["volume_series"] = volume.source_series;  // which DICOM series
+  fo.metadata["volume_orientation"] = volume.orientation_source;  // which affine placed the voxels (sform, qform, ...)
+  if (a.frame >= 0) fo.metadata["volume_frame"] = std::to_string(a.frame) + " (0-based)";
+  if (a.sum_frames) fo.metadata["volume_frame"] = "sum of all frames (unweighted)";
   if (!a.ribbon.empty()) fo.metadata["ribbon_surface"] = a.ribbon;
   if (a.normalize == "global") fo.metadata["normalisation_region"] = a.cortex;
   io::write_per_vertex(a.out, result.values, fo);
@@ -261,6 +264,8 @@ int run_sample(const SampleArgs& a) {
     j["vertices_outside_fov"] = result.vertices_outside;
     j["outside_fraction"] = result.outside_fraction;
     j["nan_vertices"] = result.nan_vertices;
+    j["volume_orientation"] = volume.orientation_source;
+    if (!volume.source_series.empty()) j["volume_series"] = volume.source_series;
     j["partial_vertices"] = result.partial_vertices;
     j["normals_flipped"] = result.normals_flipped;
     j["normalisation"] = analysis::to_string(norm.kind);
@@ -316,7 +321,8 @@ const bool registered = register_command({40, [](CLI::App& parent) {
   sub->add_option("--map", a->map, "Flat map of SURFACE (e.g. from `authalic flatten`) for the PNG; default: 3D views");
   sub->add_option("--png", a->png, "PNG path (default: OUT with .png)");
   sub->add_option("--frame", a->frame, "4D PET: the frame to sample (0-based)")->check(CLI::NonNegativeNumber);
-  sub->add_flag("--sum-frames", a->sum_frames, "4D PET: sum all frames");
+  sub->add_flag("--sum-frames", a->sum_frames, "4D PET: sum all frames (unweighted: frames of equal duration give a static image "
+                                               "in the frames' units times their number)");
   add_common_options(*sub);
   sub->callback([a]() { set_exit_code(run_sample(*a)); });
 }});
