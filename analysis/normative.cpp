@@ -41,11 +41,19 @@ struct Shape {
   std::vector<std::string> hemispheres;
   std::string normalisation, units;
   std::string correspondence;  // "per-subject" or "atlas <identity>" (analysis/atlas.h)
+  std::string reference_mask;  // SHA-256 of the reference-region mask, "" = not recorded
 };
 
-Shape shape_of(const NormativeReference& r) { return {r.grid, r.hemispheres, r.normalisation, r.units, r.correspondence}; }
+std::string table_reference_mask(const ElementTable& t) {
+  const auto it = t.metadata.find(kReferenceMaskKey);
+  return it == t.metadata.end() ? std::string() : it->second;
+}
+
+Shape shape_of(const NormativeReference& r) {
+  return {r.grid, r.hemispheres, r.normalisation, r.units, r.correspondence, r.reference_mask};
+}
 Shape shape_of(const ElementTable& t) {
-  Shape s{t.grid, {}, t.normalisation, t.units, table_correspondence(t)};
+  Shape s{t.grid, {}, t.normalisation, t.units, table_correspondence(t), table_reference_mask(t)};
   for (const auto& b : t.blocks) s.hemispheres.push_back(b.hemisphere);
   return s;
 }
@@ -61,6 +69,12 @@ void check_shapes(const Shape& ref, const Shape& other, const std::string& what,
   if (ref.hemispheres != other.hemispheres) refuse("the hemisphere list", join(ref.hemispheres), join(other.hemispheres));
   if (ref.normalisation != other.normalisation) refuse("the intensity normalisation", ref.normalisation, other.normalisation);
   if (ref.units != other.units) refuse("the units", "'" + ref.units + "'", "'" + other.units + "'");
+  // SUVRs of another reference region are other numbers (files that do not record it pass).
+  if (ref.normalisation == "reference-region" && !ref.reference_mask.empty() && !other.reference_mask.empty() &&
+      ref.reference_mask != other.reference_mask)
+    throw InputError(what + ": normalised with another reference-region mask (SHA-256 " + other.reference_mask.substr(0, 12) +
+                     "...) than " + ref_name + " (" + ref.reference_mask.substr(0, 12) +
+                     "...); SUVRs of different regions cannot be compared: normalise with the reference's mask");
   // Element (i, j) means other anatomy in another correspondence mode or atlas (issue 14).
   if (ref.correspondence != other.correspondence)
     throw InputError(what + ": the element correspondence is '" + other.correspondence + "' but " + ref_name + " has '" +
@@ -164,6 +178,7 @@ NormativeReference empty_reference_like(const ElementTable& table) {
   r.normalisation = table.normalisation;
   r.units = table.units;
   r.correspondence = table_correspondence(table);
+  r.reference_mask = table_reference_mask(table);
   r.software = software_version();
   const std::size_t size = static_cast<std::size_t>(r.num_values());
   r.n.assign(size, 0.0);
@@ -268,6 +283,7 @@ NormativeReference merge_references(const NormativeReference& a, const Normative
   for (const auto& s : b.subjects) check_new_subject(a, s.id, b_name);
   NormativeReference r = a;
   r.software = software_version();
+  if (r.reference_mask.empty()) r.reference_mask = b.reference_mask;
   r.subjects.insert(r.subjects.end(), b.subjects.begin(), b.subjects.end());
   // The first subjects' values: a's, then b's (each side keeps its first ones), as a build of all.
   if (a.keeps_values() && b.keeps_values()) {
@@ -373,6 +389,7 @@ std::string reference_to_json(const NormativeReference& r) {
   j["normalisation"] = r.normalisation;
   j["units"] = r.units;
   j["correspondence"] = r.correspondence;
+  if (!r.reference_mask.empty()) j[kReferenceMaskKey] = r.reference_mask;
   j["num_subjects"] = r.subjects.size();
   j["age_model"] = r.age_model;
   j["partial"] = r.partial;
@@ -421,6 +438,7 @@ NormativeReference reference_from_json(const std::string& text, const std::strin
     r.units = j.at("units").get<std::string>();
     r.software = j.value("software", "");
     r.correspondence = j.value("correspondence", std::string(kPerSubjectCorrespondence));
+    r.reference_mask = j.value(kReferenceMaskKey, std::string());
     for (const auto& s : j.at("subjects")) {
       NormativeSubject sub;
       sub.id = s.value("id", "");

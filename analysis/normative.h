@@ -69,6 +69,9 @@
 namespace authalic::analysis {
 
 inline constexpr int kNormativeFormatVersion = 1;
+// ElementTable::metadata key of the reference-region mask's SHA-256 (written by `run` and, from
+// `sample`'s output, by `elements`).
+inline constexpr const char* kReferenceMaskKey = "reference_mask_sha256";
 
 struct NormativeSubject {
   std::string id;
@@ -94,6 +97,10 @@ struct NormativeReference {
   // How elements correspond across its subjects: "per-subject" or "atlas <identity>" (issue 14,
   // analysis/atlas.h); a patient table must match (check_compatible). Files without it: per-subject.
   std::string correspondence = kPerSubjectCorrespondence;
+  // SHA-256 of the reference-region mask the values were normalised with (kReferenceMaskKey of
+  // the tables; "" when not reference-region or not recorded): a patient normalised with another
+  // region is refused (check_compatible), its SUVRs are not the controls'.
+  std::string reference_mask;
   std::vector<NormativeSubject> subjects;
   bool age_model = false;                // age statistics kept (every subject has an age)
   bool partial = false;                  // built for merging (normative build --partial): not for comparing

@@ -856,6 +856,8 @@ ElementTable elements_step(Hemisphere (&hemis)[2], const SubjectInputs& in, cons
   table.age = in.age > 0 ? in.age : std::numeric_limits<double>::quiet_NaN();
   table.metadata["software"] = software_version();
   table.metadata["sampling"] = hemis[0].sampling.method;
+  if (norm.kind == NormalisationKind::ReferenceRegion && !norm.mask_path.empty())
+    table.metadata[kReferenceMaskKey] = io::sha256_file(norm.mask_path);  // compare refuses SUVRs of another region
   table.metadata["correspondence"] = correspondence;
   for (Hemisphere& h : hemis) {
     const ElementMap m = prepare_element_map(h.white.mesh.V, h.cortex_faces, h.map.UV, h.map.F, h.pet, Domain::square(),

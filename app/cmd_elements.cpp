@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/elements.h"
+#include "analysis/normative.h"
 #include "app/command.h"
 #include "app/map_json.h"
 #include "core/error.h"
@@ -204,6 +205,7 @@ int run_elements(const ElementsArgs& a) {
     table.metadata["correspondence"] = c->second;
   if (meta.count("sampling")) table.metadata["sampling"] = meta.at("sampling");
   if (meta.count("normalisation_detail")) table.metadata["normalisation_detail"] = meta.at("normalisation_detail");
+  if (meta.count("normalisation_mask_sha256")) table.metadata[analysis::kReferenceMaskKey] = meta.at("normalisation_mask_sha256");
 
   const MatrixXd V_scanner = [&] {
     MatrixXd out(surface.mesh.V.rows(), 3);

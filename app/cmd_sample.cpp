@@ -17,6 +17,7 @@
 #include "app/command.h"
 #include "core/error.h"
 #include "core/version.h"
+#include "io/checksum.h"
 #include "io/image_io.h"
 #include "io/registration.h"
 #include "io/surface_io.h"
@@ -182,6 +183,8 @@ void write_sampled_values(const SampleArgs& a, const io::Volume& volume, const s
   if (a.sum_frames) fo.metadata["volume_frame"] = "sum of all frames (unweighted)";
   if (!a.ribbon.empty()) fo.metadata["ribbon_surface"] = a.ribbon;
   if (a.normalize == "global") fo.metadata["normalisation_region"] = a.cortex;
+  if (norm.kind == analysis::NormalisationKind::ReferenceRegion && !norm.mask_path.empty())
+    fo.metadata["normalisation_mask_sha256"] = io::sha256_file(norm.mask_path);
   io::write_per_vertex(a.out, result.values, fo);
 }
 

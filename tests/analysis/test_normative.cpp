@@ -311,6 +311,33 @@ TEST(Normative, ExtrapolatedAgeIsNotedAndImplausibleValuesRefused) {
   }
 }
 
+// SUVRs of another reference region are other numbers: a patient normalised with another mask
+// than the controls is refused (56.9 % of elements were flagged hyper with --no-rescale); tables
+// that do not record their mask pass, as before.
+TEST(Normative, APatientNormalisedWithAnotherReferenceRegionIsRefused) {
+  auto tables = cohort(6, false);
+  for (auto& t : tables) {
+    t.normalisation = "reference-region";
+    t.units = "SUVR";
+    t.metadata[kReferenceMaskKey] = std::string(64, 'a');
+  }
+  const NormativeReference ref = build_from(tables, 0, 5);
+  EXPECT_EQ(ref.reference_mask, std::string(64, 'a'));
+  EXPECT_EQ(reference_from_json(reference_to_json(ref), "ref.json").reference_mask, ref.reference_mask);
+  ElementTable patient = tables[5];
+  EXPECT_NO_THROW(compare_to_reference(ref, patient, {}));
+  patient.metadata[kReferenceMaskKey] = std::string(64, 'b');
+  try {
+    compare_to_reference(ref, patient, {});
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("normalised with another reference-region mask (SHA-256 bbbbbbbbbbbb...)"), std::string::npos)
+        << e.what();
+  }
+  patient.metadata.erase(kReferenceMaskKey);
+  EXPECT_NO_THROW(compare_to_reference(ref, patient, {}));
+}
+
 // The share of a healthy subject's elements beyond |z| >= 2 is Student's t tail (known values:
 // 2 P(T_5 >= 2) = 0.101939, 2 P(T_19 >= 2) = 0.060002, 2 P(T_4 >= 2) = 0.116117 (scipy)).
 TEST(Normative, ExpectedAbnormalShareIsTheTDistributionsTail) {
