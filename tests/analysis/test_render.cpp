@@ -381,18 +381,23 @@ TEST(RenderSurfaceViews, PanelsSideBySideAndDeterministic) {
   EXPECT_EQ(a.rgb, b.rgb);
 }
 
+// Two planar "hemispheres" 60 mm apart (left at x = -30, right at x = +30), values 0, grey 0.5.
+void two_plane_hemispheres(an::HemisphereSurface* left, an::HemisphereSurface* right) {
+  plane_grid(21, &left->V, &left->F);
+  right->V = left->V;
+  right->F = left->F;
+  left->V.col(0).array() -= 30.0;
+  right->V.col(0).array() += 30.0;
+  right->left = false;
+  left->values = right->values = VectorXd::Zero(left->V.rows());
+  left->background = right->background = VectorXd::Constant(left->V.rows(), 0.5);
+}
+
 TEST(RenderStandardViews, EightPanelsThresholdedOverGreyAndOneScale) {
-  // Two planar "hemispheres" facing +-x; only the left one has |z| above the threshold, on its
-  // anterior half.
+  // Only the left hemisphere has |z| above the threshold, on its anterior half.
   an::HemisphereSurface left, right;
-  plane_grid(21, &left.V, &left.F);
-  right.V = left.V;
-  left.V.col(0).array() -= 30.0;
-  right.V.col(0).array() += 30.0;
-  right.left = false;
+  two_plane_hemispheres(&left, &right);
   left.values = (left.V.col(1).array() > 0).cast<double>() * -3.0;
-  right.values = VectorXd::Zero(right.V.rows());
-  left.background = right.background = VectorXd::Constant(left.V.rows(), 0.5);
   an::ScalarColouring c;
   c.colormap = "coolwarm";
   c.vmin = -5;
@@ -425,16 +430,9 @@ TEST(RenderStandardViews, EightPanelsThresholdedOverGreyAndOneScale) {
 // "within normal limits".
 TEST(RenderStandardViews, CortexWithoutAValueIsMarkedNotShadedAsNormal) {
   an::HemisphereSurface left, right;
-  plane_grid(21, &left.V, &left.F);
-  right.V = left.V;
-  left.V.col(0).array() -= 30.0;
-  right.V.col(0).array() += 30.0;
-  right.left = false;
-  left.values = VectorXd::Zero(left.V.rows());
+  two_plane_hemispheres(&left, &right);
   for (Eigen::Index v = 0; v < left.V.rows(); ++v)
     if (left.V(v, 1) > 0) left.values(v) = std::nan("");  // the anterior half has no value
-  right.values = VectorXd::Zero(right.V.rows());
-  left.background = right.background = VectorXd::Constant(left.V.rows(), 0.5);
   an::ScalarColouring c;
   c.colormap = "coolwarm";
   c.vmin = -5;
