@@ -613,6 +613,10 @@ Comparison compare_elements(const NormativeReference& ref, const ElementTable& p
   out.age_adjusted = options.use_age && age_model && std::isfinite(out.patient_age);
   if (options.use_age && age_model && !std::isfinite(out.patient_age))
     out.notes.push_back("the reference has an age model but the patient's age is unknown: z-scores are not age-adjusted");
+  if (ref.normalisation == "reference-region" && ref.reference_mask.empty() != table_reference_mask(patient).empty())
+    out.notes.push_back(std::string(ref.reference_mask.empty() ? "the reference" : "the patient's table") +
+                        " does not record its reference-region mask (made before 2026-12-07): that both were normalised with "
+                        "the same region could not be checked");
   if (out.age_adjusted) {  // a line is only known between the controls' ages
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     for (const auto& s : ref.subjects) lo = std::min(lo, s.age), hi = std::max(hi, s.age);

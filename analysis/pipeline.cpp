@@ -702,6 +702,7 @@ LoadedInputs load_and_check_inputs(Hemisphere (&hemis)[2], const SubjectInputs& 
                                     "--require-age to compare without age adjustment");
   if (options.normalize != "none" && options.normalize != "global") r.mask = std::make_unique<io::Volume>(io::read_volume(options.normalize));
   r.checksums = input_checksums(in);
+  if (!r.pet.source_series.empty()) r.checksums["pet"]["dicom_series"] = r.pet.source_series;  // which series of the folder
   log.end(summary);
   return r;
 }
@@ -812,10 +813,10 @@ void note_cortex_coverage(Hemisphere& h, const io::Volume& pet, const MatrixXd& 
   w << h.name << " hemisphere: ";
   if (h.cortex_outside > 0)
     w << h.cortex_outside << " of the cortex's " << h.cortex_vertices << " vertices (" << 100.0 * h.cortex_outside / h.cortex_vertices
-      << " %) lie outside the PET's field of view (sampled only where their inward segments enter it)" << (h.cortex_no_value > 0 ? ", " : "");
+      << " %) lie outside the PET's field of view" << (h.cortex_no_value > 0 ? ", " : "");
   if (h.cortex_no_value > 0)
     w << h.cortex_no_value << (h.cortex_outside > 0 ? "" : " of the cortex's " + std::to_string(h.cortex_vertices) + " vertices")
-      << " have no PET value (out of view or NaN voxels; elements average the rest)";
+      << " have no PET value (outside, part of their sampling segment outside, or on NaN voxels; elements average the rest)";
   w << ": check the scan's coverage";
   summary.warnings.push_back(w.str());
 }

@@ -35,7 +35,7 @@ struct ScalarColouring {
   // Per vertex (#V, or empty): the vertex should have a value but has none (no PET there, or no z:
   // too few controls): drawn in no_value_colour, so that it is not read as "within normal limits".
   std::vector<char> no_value;
-  Rgb no_value_colour{235, 190, 60};
+  Rgb no_value_colour{220, 0, 220};  // magenta: in neither coolwarm nor viridis
 };
 
 struct FlatRenderOptions {

@@ -81,7 +81,7 @@ void standard_view_figures(const ReportData& d, ReportFigures& f) {
     f.views.push_back({render_standard_views(z, z_colouring(VectorXd(), threshold), o), "eight standard views of z",
                        "z of each equal-area element on the subject's pial surface, shown where |z| \u2265 " +
                            format_fixed(threshold, 1) + "; grey: within normal limits (shaded by sulcal depth: darker in sulci); " +
-                           "amber: cortex without a z (no PET value there, or too few controls)."});
+                           "magenta: cortex without a z (no PET value there, or too few controls)."});
   }
   std::vector<HemisphereSurface> pet = view_surfaces(d, false);
   VectorXd all(0);
@@ -94,7 +94,7 @@ void standard_view_figures(const ReportData& d, ReportFigures& f) {
     o.title = "PET (" + d.pet_units + ")";
     f.views.push_back({render_standard_views(pet, pet_colouring(all, d.pet_units), o), "eight standard views of PET",
                        "Normalised PET sampled on the cortex (2nd-98th percentile colour range); grey: outside the cortex; "
-                       "amber: cortex without a PET value (outside the field of view)."});
+                       "magenta: cortex without a PET value (outside the field of view)."});
   }
 }
 

@@ -121,8 +121,14 @@ void first_page(Page& p, const ReportData& d, const ReportFigures& f) {
                         style(10.5, true));
   p.y += 2 + p.cv.paragraph(p.left, p.y, p.width, kReportDisclaimer, style(8.5, false, kGrey));
   heading(p, "3D views");
-  const double room = (kPageHeight - kMarginPt - p.y) / std::max<std::size_t>(f.views.size(), 1);
-  for (const ReportFigure& fig : f.views) picture(p, fig.image, room - 6);
+  // Each view with its caption (what grey and magenta mean, as the HTML says).
+  double captions = 0;
+  for (const ReportFigure& fig : f.views) captions += paragraph_height(p.width, fig.caption, 7.5) + 2;
+  const double room = (kPageHeight - kMarginPt - p.y - captions) / std::max<std::size_t>(f.views.size(), 1);
+  for (const ReportFigure& fig : f.views) {
+    picture(p, fig.image, room - 6);
+    p.y += p.cv.paragraph(p.left, p.y, p.width, fig.caption, style(7.5, false, kGrey)) + 2;
+  }
 }
 
 std::vector<std::vector<std::string>> cluster_rows(const ReportData& d) {

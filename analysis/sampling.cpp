@@ -107,12 +107,12 @@ void finish(SamplingResult& r, const io::Volume& volume) {
   // NaN vertices among those used, beyond the ones outside the field of view (noted already).
   if (r.partial_vertices > 0)
     r.notes.push_back(std::to_string(r.partial_vertices) + " vertices have part of their sampling segment outside the field of view "
-                      "or on NaN voxels; they are NaN in the output and left out of means (a value from part of the segment "
+                      "or on NaN or infinite voxels; they are NaN in the output and left out of means (a value from part of the segment "
                       "would lean toward one end of it)");
   const int nan_inside =
       r.nan_vertices - (static_cast<int>(r.values.size()) - r.vertices_checked) - r.vertices_outside - r.partial_vertices;
   if (nan_inside > 0)
-    r.notes.push_back(std::to_string(nan_inside) + " vertices have no finite value (NaN voxels); they are NaN in the "
+    r.notes.push_back(std::to_string(nan_inside) + " vertices have no finite value (NaN or infinite voxels); they are NaN in the "
                       "output and left out of means");
 }
 

@@ -248,7 +248,7 @@ void setup(CLI::App& parent) {
       "A map that fails its acceptance (0 flipped faces, element CV <= 0.01 at 64x32, or 0.3 / sqrt(faces per element) "
       "where larger, per-vertex mean |ln area ratio| <= 0.01) is an error: exit code 3, nothing written.");
   sub->add_option("SURFACE", a->surface, "Closed genus-0 surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, MNI .obj, STL), mm")->required();
-  sub->add_option("OUT", a->out, "Output sphere surface (GIFTI .surf.gii), same vertices and triangles as SURFACE")->required();
+  sub->add_option("OUT", a->out, "Output sphere surface, same vertices and triangles as SURFACE: GIFTI (.surf.gii), or FreeSurfer binary for a name without a known extension (e.g. lh.sphere.authalic)")->required();
   sub->add_option("--metrics", a->metrics, "Write distortion metrics (JSON; areas in mm^2, element grid 64 x 32)");
   sub->add_option("--png", a->png, "Write a PNG of the sphere seen from lateral and medial, shaded by sulcal depth");
   sub->add_option("--sulc", a->sulc, "Per-vertex sulcal depth for the PNG (FreeSurfer sulc or GIFTI shape; default: depth "

@@ -335,7 +335,10 @@ TEST(Normative, APatientNormalisedWithAnotherReferenceRegionIsRefused) {
         << e.what();
   }
   patient.metadata.erase(kReferenceMaskKey);
-  EXPECT_NO_THROW(compare_to_reference(ref, patient, {}));
+  bool noted = false;
+  for (const auto& n : compare_to_reference(ref, patient, {}).notes)
+    noted = noted || n.find("the patient's table does not record its reference-region mask") != std::string::npos;
+  EXPECT_TRUE(noted) << "a table without its mask passes, with a note";
 }
 
 // The share of a healthy subject's elements beyond |z| >= 2 is Student's t tail (known values:
