@@ -836,7 +836,8 @@ std::string comparison_summary_json(const NormativeReference& ref, const std::st
                     {"hemispheres", ref.hemispheres},
                     {"normalisation", ref.normalisation},
                     {"units", ref.units},
-                    {"age_model", ref.age_model}};
+                    {"age_model", has_age_model(ref)},             // usable: enough controls, ages that differ
+                    {"age_statistics_stored", ref.age_model}};     // every control had an age
   j["patient"] = {{"table", patient_path}, {"subject_id", patient.subject_id}, {"age", number_or_null(cmp.patient_age)}};
   j["age_adjusted"] = cmp.age_adjusted;
   j["threshold"] = cmp.threshold;

@@ -279,6 +279,10 @@ TEST(Normative, AgeModelEqualsDirectLeastSquaresFit) {
   noted = false;
   for (const auto& n : small.notes) noted = noted || n.find("the age model needs at least 8") != std::string::npos;
   EXPECT_TRUE(noted);
+  // The comparison's summary says the model was not used (it said "age_model": true for the ages stored).
+  const auto summary = nlohmann::json::parse(comparison_summary_json(few, "ref.json", patient, "p.tsv", small, {}));
+  EXPECT_EQ(summary["reference"]["age_model"], false);
+  EXPECT_EQ(summary["reference"]["age_statistics_stored"], true);
   EXPECT_TRUE(has_age_model(build_from(tables, 0, kMinAgeModelControls)));
 }
 
