@@ -2,6 +2,7 @@
 #include "analysis/elements.h"
 
 #include <algorithm>
+#include <numeric>
 #include <array>
 #include <cctype>
 #include <charconv>
@@ -355,13 +356,21 @@ ElementResult compute_elements(const ElementMap& map, const ElementGrid& grid, c
     r.vertex_element(v) = c;
     ++r.block.elements[c].n_vertices;
   }
-  double sum = 0, sum2 = 0;
-  for (double a : area) sum += a;
-  const double mean = sum / ncell;
-  for (double a : area) sum2 += (a - mean) * (a - mean);
-  r.total_area_mm2 = sum;
-  r.area_cv = mean > 0 ? std::sqrt(sum2 / ncell) / mean : 0.0;
+  r.total_area_mm2 = std::accumulate(area.begin(), area.end(), 0.0);
+  r.area_cv = element_area_cv(r.block);
   return r;
+}
+
+double element_area_cv(const ElementBlock& block, int col_begin, int col_end) {
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  for (const auto& e : block.elements)
+    if (e.col >= col_begin && e.col < col_end) sum += e.area_mm2, ++n;
+  if (n == 0) return std::nan("");
+  const double mean = sum / n;
+  for (const auto& e : block.elements)
+    if (e.col >= col_begin && e.col < col_end) sum2 += (e.area_mm2 - mean) * (e.area_mm2 - mean);
+  return mean > 0 ? std::sqrt(sum2 / n) / mean : 0.0;
 }
 
 std::vector<double> block_values(const ElementBlock& block) {

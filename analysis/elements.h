@@ -159,6 +159,9 @@ void write_element_nifti(const std::string& path, const std::vector<float>& data
 // Mean element area (mm^2) of a block, or over a table's blocks: the cortical area per element
 // (over the elements that hold cortex).
 double mean_element_area(const ElementBlock& block);
+// Coefficient of variation (population SD / mean) of the areas of a block's elements in columns
+// [col_begin, col_end) (all by default); NaN when none is there, 0 when their mean is 0.
+double element_area_cv(const ElementBlock& block, int col_begin = 0, int col_end = std::numeric_limits<int>::max());
 double mean_element_area(const ElementTable& table);
 // One block's element values (value, or area_mm2 with areas = true) as the data of a cols x rows
 // element image (voxel (col, row) = element row * cols + col), for write_element_nifti.

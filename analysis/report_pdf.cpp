@@ -48,12 +48,17 @@ double paragraph_height(double w, const std::string& text, double size) {
   return static_cast<double>(wrap_text(text, size, w).size()) * 1.3 * size;
 }
 
+// The width of key_values' key column: the widest key, at most 45 % of the width w.
+double key_column_width(double w, const KeyValues& rows) {
+  double key_width = 0;
+  for (const auto& [k, v] : rows) key_width = std::max(key_width, text_width(k, kBody));
+  return std::min(key_width + 8, 0.45 * w);
+}
+
 // Height key_values will use, measured without drawing.
 double key_values_height(double w, const KeyValues& rows) {
   const double pitch = text_line_height(kBody) + 1.5;
-  double key_width = 0;
-  for (const auto& [k, v] : rows) key_width = std::max(key_width, text_width(k, kBody));
-  key_width = std::min(key_width + 8, 0.45 * w);
+  const double key_width = key_column_width(w, rows);
   double used = 0;
   for (const auto& [k, v] : rows) used += std::max(pitch, paragraph_height(w - key_width, v, kBody));
   return used;
@@ -67,9 +72,7 @@ constexpr double kFooterTop = kPageHeight - 30.0;
 // Key-value rows in two columns (keys in grey) starting at x, width w; returns the height used.
 double key_values(Canvas& cv, double x, double y, double w, const KeyValues& rows) {
   const double pitch = text_line_height(kBody) + 1.5;
-  double key_width = 0;
-  for (const auto& [k, v] : rows) key_width = std::max(key_width, text_width(k, kBody));
-  key_width = std::min(key_width + 8, 0.45 * w);
+  const double key_width = key_column_width(w, rows);
   double used = 0;
   for (const auto& [k, v] : rows) {
     cv.text(x, y + used, k, style(kBody, false, kGrey));
@@ -165,6 +168,10 @@ std::vector<std::vector<std::string>> lobe_rows(const ReportData& d) {
 }
 
 void second_page(Page& p, const ReportData& d, const ReportFigures& f) {
+  // What ends the page: the quality and processing tables, then the disclaimer.
+  const double half = p.width / 2 - 8;
+  const double tail = heading_height() + std::max(key_values_height(half, d.quality), key_values_height(half, d.parameters)) + 6 +
+                      paragraph_height(p.width, kReportDisclaimer, 8.5);
   heading(p, "Clusters of abnormal elements");
   if (!d.normative.present) {
     p.y += p.cv.paragraph(p.left, p.y, p.width, "No normative reference: no clusters.", style(kBody));
@@ -175,12 +182,10 @@ void second_page(Page& p, const ReportData& d, const ReportFigures& f) {
   } else {
     // Room for the rest of the page (the lobe table, flat maps of at least 120 pt, quality, the
     // disclaimer) decides how many cluster rows fit; the others are in the HTML and the TSV.
-    const double half = p.width / 2 - 8, pitch = text_line_height(kBody) + 2;
+    const double pitch = text_line_height(kBody) + 2;
     const std::size_t lobes = lobe_rows(d).size();
     const double lobe_table = 1 + std::min<std::size_t>(lobes, 10) + (lobes > 10 ? 1 : 0);  // header, rows, "... more"
-    const double rest = (d.regions.empty() ? 0.0 : heading_height() + lobe_table * pitch) + heading_height() + 120 + 4 + heading_height() +
-                        std::max(key_values_height(half, d.quality), key_values_height(half, d.parameters)) + 6 +
-                        paragraph_height(p.width, kReportDisclaimer, 8.5) +
+    const double rest = (d.regions.empty() ? 0.0 : heading_height() + lobe_table * pitch) + heading_height() + 120 + 4 + tail +
                         paragraph_height(p.width, d.normative.chance_clusters_short + ".", 8.5) +
                         (d.region_method.empty() ? 0.0 : paragraph_height(p.width, "Regions: " + d.region_method + ".", 8.5));
     const double room = kFooterTop - p.y - rest - 2 * pitch;
@@ -201,10 +206,7 @@ void second_page(Page& p, const ReportData& d, const ReportFigures& f) {
   const bool z = d.normative.present;
   const double cell = p.width / 2;
   // The flat maps take what the quality table and the disclaimer leave (at most 200 pt).
-  const double half_width = p.width / 2 - 8;
-  const double after = heading_height() + std::max(key_values_height(half_width, d.quality), key_values_height(half_width, d.parameters)) +
-                       6 + paragraph_height(p.width, kReportDisclaimer, 8.5);
-  const double map_height = std::clamp(kFooterTop - p.y - after - 4, 60.0, 200.0);
+  const double map_height = std::clamp(kFooterTop - p.y - tail - 4, 60.0, 200.0);
   int k = 0;
   double row_height = 0;
   for (const ReportFigure& fig : f.flat_maps) {
@@ -217,7 +219,6 @@ void second_page(Page& p, const ReportData& d, const ReportFigures& f) {
   }
   p.y += row_height + 4;
   heading(p, "Quality and processing");
-  const double half = p.width / 2 - 8;
   const double a = key_values(p.cv, p.left, p.y, half, d.quality);
   const double b = key_values(p.cv, p.left + half + 16, p.y, half, d.parameters);
   p.y += std::max(a, b) + 6;

@@ -112,17 +112,6 @@ RectanglePartCells rectangle_part_cells(const analysis::ElementMap& em, const an
   return p;
 }
 
-double area_cv_of_columns(const analysis::ElementBlock& block, int col_begin, int col_end) {
-  std::vector<double> areas;
-  for (const auto& e : block.elements)
-    if (e.col >= col_begin && e.col < col_end) areas.push_back(e.area_mm2);
-  if (areas.empty()) return std::nan("");
-  double mean = 0, sum2 = 0;
-  for (double x : areas) mean += x / static_cast<double>(areas.size());
-  for (double x : areas) sum2 += (x - mean) * (x - mean);
-  return mean > 0 ? std::sqrt(sum2 / static_cast<double>(areas.size())) / mean : 0.0;
-}
-
 int run_elements(const ElementsArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   io::check_file_roles({a.surface, a.map, a.values}, analysis::element_output_paths(a.prefix).all());
@@ -171,7 +160,7 @@ int run_elements(const ElementsArgs& a) {
   analysis::ElementResult result = analysis::compute_elements(em, grid, surface.to_scanner);
   const RectanglePartCells part = rectangle_part_cells(em, grid);
   if (part.is_part) {
-    result.area_cv = area_cv_of_columns(result.block, part.col_begin, part.col_end);
+    result.area_cv = analysis::element_area_cv(result.block, part.col_begin, part.col_end);
     em.notes.push_back(std::string("the map is the ") + (part.right ? "right" : "left") +
                        " hemisphere's part of a two-hemisphere rectangle: only the cells on its side of the seam hold cortex (area CV over the " +
                        std::to_string(part.col_end - part.col_begin) + " columns wholly on its side)");
