@@ -38,6 +38,7 @@ struct SphereArgs {
   int passes = 4;
   std::string route = "auto";
   std::string refine = "none";
+  double seam_corner = 0.0;
   bool keep_failed = false;
   double max_memory = -1;  // GB; < 0: 75% of the physical RAM
 };
@@ -55,6 +56,7 @@ SphereMapOptions sphere_map_options(const SphereArgs& a) {
   options.flow = a.passes > 0;
   options.route = a.route == "square" ? SphereRoute::Square : a.route == "flow" ? SphereRoute::Flow : SphereRoute::Auto;
   options.square_route.square.optimal_transport = a.refine == "omt";
+  options.square_route.corner_offset = a.seam_corner;
   if (options.square_route.square.optimal_transport && options.route == SphereRoute::Flow)
     throw InputError("--refine omt: the refinement works on the square route's square map; drop --route flow");
   if (!a.conformal.empty() && options.route != SphereRoute::Flow)
@@ -102,7 +104,20 @@ void add_route_json(nlohmann::json& j, const SphereMapResult& r) {
                  {"passes", passes}};
   } else {
     const SphereFromSquareReport& q = r.square_route;
+    nlohmann::json placements = nlohmann::json::array();
+    for (const SquarePlacement& p : r.placements)
+      placements.push_back({{"corner_offset_of_seam_length", p.corner_offset},
+                            {"corner_vertex", p.corner_vertex},
+                            {"covers_sphere_once", p.covers_once},
+                            {"failure", p.why},
+                            {"element_cv_64x32", p.element_cv},
+                            {"element_min_over_mean", p.element_min},
+                            {"element_max_over_mean", p.element_max}});
     j["square_route"] = {{"cap_seed_vertex", q.seed_vertex},
+                         {"corner_placement_rule", "the square's corner (0, 0) at the seam vertex corner_offset of the seam's length past its most anterior vertex; while an element of the sphere is more than 10 % off its share, up to two more placements 1/8 and 1/16 of the seam further on; of those tried, the lowest element CV is kept"},
+                         {"corner_placements_tried", placements},
+                         {"corner_vertex", q.corner_vertex},
+                         {"corner_offset_of_seam_length", q.corner_offset},
                          {"cap_faces", q.cap_faces},
                          {"cap_area_fraction", q.cap_area_fraction},
                          {"rest_faces", q.rest_faces},
@@ -154,6 +169,7 @@ nlohmann::json sphere_json(const SphereArgs& a, const TriMesh& mesh, const Spher
                       {"seconds", {{"conformal", t.conformal}, {"flow", t.flow}, {"total", t.total}}}};
   j["acceptance"] = acceptance_json(problem, final_metrics, true);
   j["refine"] = a.refine;
+  j["seam_corner"] = a.seam_corner;
   if (options.square_route.square.optimal_transport && r.route == SphereRoute::Square) {
     const OptimalTransportReport& ot = r.square_route.square_transport;
     j["square_route_transport"] = {{"iterations", ot.iterations},
@@ -246,7 +262,8 @@ void setup(CLI::App& parent) {
       "the sphere (--route flow: Haker's conformal map, Moebius centring, Moser's flow). Orientation: +x right, "
       "+y anterior, +z superior. "
       "A map that fails its acceptance (0 flipped faces, element CV <= 0.01 at 64x32, or 0.3 / sqrt(faces per element) "
-      "where larger, per-vertex mean |ln area ratio| <= 0.01) is an error: exit code 3, nothing written.");
+      "where larger, every element within 25 % of the mean area, per-vertex mean |ln area ratio| <= 0.01) is an error: "
+      "exit code 3, nothing written.");
   sub->add_option("SURFACE", a->surface, "Closed genus-0 surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, MNI .obj, STL), mm")->required();
   sub->add_option("OUT", a->out, "Output sphere surface, same vertices and triangles as SURFACE: GIFTI (.surf.gii), or FreeSurfer binary for a name without a known extension (e.g. lh.sphere.authalic)")->required();
   sub->add_option("--metrics", a->metrics, "Write distortion metrics (JSON; areas in mm^2, element grid 64 x 32)");
@@ -272,6 +289,13 @@ void setup(CLI::App& parent) {
                   "none, or omt: the square route's square map gets the optimal-transport refinement (flatten --refine omt; "
                   "docs/maps.md) before it is carried to the sphere")
       ->check(CLI::IsMember({"none", "omt"}))
+      ->capture_default_str();
+  sub->add_option("--seam-corner", a->seam_corner,
+                  "Expert, square route: where the square's corner (0, 0) falls on the seam around the cap, as a share "
+                  "of the seam's length past its most anterior vertex; while an element is more than 10 % off its share, "
+                  "the route tries up to two more placements (0.125 and 0.0625 further on) and keeps "
+                  "the sphere with the lowest element CV")
+      ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   sub->add_flag("--keep-failed", a->keep_failed,
                 "Expert: write the outputs even when the map fails its acceptance, marked FAILED in their metadata and "

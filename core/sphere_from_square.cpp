@@ -7,6 +7,7 @@
 #include <numeric>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -49,6 +50,25 @@ RegionCleanup choose_cap(const MatrixXd& V, const MatrixXi& F, double fraction, 
     acc += va[v];
   }
   return region_faces_from_vertices(V, F, in);
+}
+
+// The seam vertex `offset` of the seam's length (3D edge lengths along B's boundary loop) past its
+// most anterior vertex (largest y; ties, as on voxelised surfaces: largest z, then x).
+int seam_corner_vertex(const MatrixXd& V, const MatrixXi& FB, double offset) {
+  const std::vector<int> loop = boundary_loops(FB, static_cast<int>(V.rows())).front();
+  const std::size_t n = loop.size();
+  std::vector<double> along(n + 1, 0.0);  // length from loop[0] to loop[k]
+  std::size_t anterior = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    along[k + 1] = along[k] + (V.row(loop[(k + 1) % n]) - V.row(loop[k])).norm();
+    const Eigen::Vector3d p = V.row(loop[k]), q = V.row(loop[anterior]);
+    if (std::make_tuple(p.y(), p.z(), p.x()) > std::make_tuple(q.y(), q.z(), q.x())) anterior = k;
+  }
+  const double length = along[n];
+  double target = along[anterior] + (offset - std::floor(offset)) * length;
+  if (target >= length) target -= length;
+  const std::size_t k = static_cast<std::size_t>(std::upper_bound(along.begin(), along.begin() + static_cast<std::ptrdiff_t>(n), target) - along.begin()) - 1;
+  return loop[k];
 }
 
 // Inverse Lambert azimuthal equal-area projection, pole (0, 0, pole_sign): a point of the unit
@@ -170,6 +190,9 @@ MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const Sphe
   // 2. B: authalic square map -> disk (concentric) -> north cap (Lambert).
   SquareMapOptions so = opt.square;
   so.anatomical_anchor = false;
+  so.anchor_vertex = R.corner_vertex = seam_corner_vertex(V, FB, opt.corner_offset);
+  so.anchor_position = 0.0;
+  R.corner_offset = opt.corner_offset;
   so.orient_outward = false;
   so.cotangent_start = false;
   so.width = 1.0;

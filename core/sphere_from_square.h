@@ -55,6 +55,14 @@ inline SquareMapOptions sphere_square_options() {
 
 struct SphereFromSquareOptions {
   double cap_fraction = 0.1;   // share of the surface area in the cap C
+  // Where B's square map puts its corner (0, 0) on the seam: the seam vertex this share of the
+  // seam's length past its most anterior vertex. A geometric rule, so the map does not depend on
+  // the vertex order (the seam's first vertex in index order did: a permuted fs741 white moved
+  // 12 mm). The square's corners are where its map can leave a crushed pocket that the sphere's
+  // steps do not open (fs741 pial, corners half a side further on: one element at 0.74 of its
+  // share, element CV 0.0092 against 0.0031); authalic_sphere_map tries other placements then
+  // (core/sphere_map.h, kCornerOffsets).
+  double corner_offset = 0.0;
   SquareMapOptions square = sphere_square_options();  // for B (orientation rules are switched off: the input is outward)
   StretchEnergyOptions cap = cap_stretch_options();  // for C (the boundary is always held)
   CrushedPatchOptions crushed;  // patches the parts' maps crushed, opened on the joined sphere
@@ -75,6 +83,8 @@ struct SphereFromSquareReport {
   int cap_faces = 0, rest_faces = 0;
   double cap_area_fraction = 0;  // measured share of C
   int seed_vertex = -1;          // the cap's centre
+  int corner_vertex = -1;        // the seam vertex at the square's corner (0, 0)
+  double corner_offset = 0;      // its share of the seam's length past the most anterior seam vertex
   FlowReport square_flow;        // B's square map: its flow and stretch-energy start
   StretchEnergyReport square_stretch;
   OptimalTransportReport square_transport;  // B's optimal-transport refinement, when asked for

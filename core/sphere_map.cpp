@@ -11,6 +11,8 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/grid_overlap.h"
+#include "core/metrics.h"
 #include "core/sparse_cholesky.h"
 
 namespace authalic {
@@ -270,6 +272,93 @@ void finish_sphere(const MatrixXd& V, const MatrixXi& F, const SphereMapOptions&
   result.sphere = std::move(S);
 }
 
+void measure_elements(const MatrixXd& V, const MatrixXi& F, const MatrixXd& S, SquarePlacement& p);
+
+// One attempt of the square route with the seam's corner at `offset`: the finished sphere in
+// `result`, and its placement (element areas measured when it covers the sphere once).
+SquarePlacement square_attempt(const MatrixXd& V, const MatrixXi& F, const SphereMapOptions& options, double offset,
+                               SphereMapResult& result, const ProgressFn& progress) {
+  SquarePlacement p;
+  p.corner_offset = offset;
+  SphereFromSquareOptions so = options.square_route;
+  so.corner_offset = offset;
+  try {
+    MatrixXd S = sphere_from_square_map(V, F, so, &result.square_route, progress);
+    p.corner_vertex = result.square_route.corner_vertex;
+    finish_sphere(V, F, options, S, result);
+    p.mapped = true;
+    p.covers_once = sphere_covers_once(result.sphere, F);
+    if (!p.covers_once) p.why = "the square route's sphere does not cover it once";
+  } catch (const ProcessingError& e) {
+    p.why = e.what();
+  }
+  result.route = SphereRoute::Square;
+  result.conformal = result.sphere;  // this route has no conformal sphere
+  if (p.covers_once) measure_elements(V, F, result.sphere, p);
+  return p;
+}
+
+// The sphere's element areas (64 x 32, as map_metrics) into p: CV and extremes over the mean.
+void measure_elements(const MatrixXd& V, const MatrixXi& F, const MatrixXd& S, SquarePlacement& p) {
+  const SphereGridSpec grid{64, 32};
+  const auto pieces = sphere_grid_overlap(S, F, grid);
+  const VectorXd cells = cell_surface_areas(pieces, face_areas(V, F), piece_face_areas(pieces, static_cast<int>(F.rows())), grid.num_cells());
+  const double mean = cells.mean();
+  p.element_cv = std::sqrt((cells.array() - mean).square().mean()) / mean;
+  p.element_min = cells.minCoeff() / mean;
+  p.element_max = cells.maxCoeff() / mean;
+}
+
+// A pocket: an element beyond kSquarePocketDeviation of the mean.
+bool has_pocket(const SquarePlacement& p) { return std::max(p.element_max - 1.0, 1.0 - p.element_min) > kSquarePocketDeviation; }
+
+// The square route: corner placements in turn (kCornerOffsets past the first) until one leaves no
+// pocket (kSquarePocketDeviation); of those that cover the sphere once, the one with the lowest
+// element CV is kept in `result`. Returns why the route gave no sphere ("" when it did); with
+// SphereRoute::Square that is thrown instead.
+std::string map_by_square_route(const MatrixXd& V, const MatrixXi& F, const SphereMapOptions& options, SphereMapResult& result,
+                                const ProgressFn& progress) {
+  const double first_offset = options.square_route.corner_offset;
+  std::vector<SquarePlacement> tried;
+  int kept = -1;
+  for (double step : kCornerOffsets) {
+    SphereMapResult attempt;
+    const SquarePlacement p = square_attempt(V, F, options, first_offset + step, attempt, progress);
+    tried.push_back(p);
+    const bool better = p.covers_once && (kept < 0 || p.element_cv < tried[static_cast<std::size_t>(kept)].element_cv);
+    if (better || tried.size() == 1) {
+      result = std::move(attempt);
+      kept = better ? static_cast<int>(tried.size()) - 1 : kept;
+    }
+    if (p.covers_once && !has_pocket(p)) break;
+    if (tried.size() == kCornerOffsets.size()) break;
+    std::ostringstream msg;
+    if (p.covers_once)
+      msg << "an element holds " << (p.element_max - 1.0 > 1.0 - p.element_min ? p.element_max : p.element_min) << " x its share (element CV "
+          << p.element_cv << ")";
+    else
+      msg << p.why;
+    msg << ": trying the square's corners at another point of the seam";
+    report(progress, "sphere", -1, msg.str());
+  }
+  result.placements = tried;
+  if (kept >= 0) {
+    if (tried.size() > 1) {
+      std::ostringstream msg;
+      msg << "kept corner placement " << kept + 1 << " of " << tried.size() << ": element CV "
+          << tried[static_cast<std::size_t>(kept)].element_cv;
+      report(progress, "sphere", -1, msg.str());
+    }
+    return "";
+  }
+  const SquarePlacement& first = tried.front();
+  if (options.route == SphereRoute::Square) {
+    if (first.mapped) return "";  // `result` holds it: the caller's acceptance names what is wrong
+    throw ProcessingError(first.why);
+  }
+  return first.why;
+}
+
 }  // namespace
 
 SphereMapResult authalic_sphere_map(const TriMesh& mesh, const SphereMapOptions& options, const ProgressFn& progress) {
@@ -292,18 +381,8 @@ SphereMapResult authalic_sphere_map(const TriMesh& mesh, const SphereMapOptions&
 
   SphereMapResult result;
   if (options.route != SphereRoute::Flow) {
-    std::string why;
-    try {
-      MatrixXd S = sphere_from_square_map(V, F, options.square_route, &result.square_route, progress);
-      finish_sphere(V, F, options, S, result);
-      if (!sphere_covers_once(result.sphere, F)) why = "the square route's sphere does not cover it once";
-    } catch (const ProcessingError& e) {
-      if (options.route == SphereRoute::Square) throw;
-      why = e.what();
-    }
-    result.route = SphereRoute::Square;
-    result.conformal = result.sphere;  // this route has no conformal sphere
-    if (why.empty() || options.route == SphereRoute::Square) return result;
+    const std::string why = map_by_square_route(V, F, options, result, progress);
+    if (why.empty()) return result;
     report(progress, "sphere", -1, why + "; taking the flow route");
     result = SphereMapResult{};
     result.fallback_reason = why;
