@@ -584,7 +584,8 @@ void setup(CLI::App& parent) {
   g2->excludes(g3);
   sub->add_flag("--keep-failed", a->keep_failed,
                 "Expert: write the outputs even when the map fails its acceptance (0 flipped triangles, element CV <= 0.01 "
-                "at 32x32 or 0.3 / sqrt(faces per element) where larger, per-vertex mean |ln area ratio| <= 0.01), marked "
+                "at 32x32 or 0.3 / sqrt(faces per element) where larger, every element within 25 % of the mean area, "
+                "per-vertex mean |ln area ratio| <= 0.01), marked "
                 "FAILED in their metadata; the exit code is still 3");
   sub->add_option("--start", a->start,
                   "Start of the flow: stretch (conformal map, then stretch-energy iterations, Yueh et al. 2019) or conformal")

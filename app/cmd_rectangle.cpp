@@ -402,7 +402,8 @@ void setup(CLI::App& parent) {
       "open along an inferior-medial path (--surface), or two hemispheres side by side with widths proportional to their "
       "cortical areas (--lh/--rh). Outputs are in rectangle coordinates (x in [0,2], y in [0,1]); element grid 2K x K. "
       "A map that fails its acceptance (0 flipped faces, element CV <= 0.01 at 64x32, or 0.3 / sqrt(faces per element) "
-      "where larger, per-vertex mean |ln area ratio| <= 0.01) is an error: exit code 3, nothing written.");
+      "where larger, every element within 25 % of the mean area, per-vertex mean |ln area ratio| <= 0.01) is an error: "
+      "exit code 3, nothing written.");
   sub->add_option("OUT", a->out,
                   "--surface: output map (GIFTI .surf.gii). --lh/--rh: output prefix, writes OUT.lh.surf.gii and OUT.rh.surf.gii")
       ->required();

@@ -21,17 +21,24 @@ nlohmann::json stats_json(const AbsStats& s) {
 nlohmann::json acceptance_json(const std::string& problem, const MapMetrics& accepted, bool element_cv_checked) {
   const AuthalicAcceptance limits;
   const std::string grid = std::to_string(accepted.element_cols) + "x" + std::to_string(accepted.element_rows);
-  nlohmann::json cv = nullptr;
-  if (element_cv_checked) cv = element_cv_limit(accepted, limits);
-  std::ostringstream rule;  // default precision: "max(0.01, 3 x 0.1 / ...)"
+  nlohmann::json cv = nullptr, deviation = nullptr;
+  if (element_cv_checked) cv = element_cv_limit(accepted, limits), deviation = element_deviation_limit(accepted, limits);
+  const double faces_per_element = double(accepted.faces) / std::max(1, accepted.element_cols * accepted.element_rows);
+  std::ostringstream rule, deviation_rule;  // default precision: "max(0.01, 3 x 0.1 / ...)"
   rule << "max(" << limits.max_element_cv << ", 3 x " << limits.coarse_face_sd
-       << " / sqrt(faces per element)): looser only on coarse meshes, whose elements hold few faces";
+       << " / sqrt(faces per element)): 3 standard errors of a map whose faces are off by " << limits.coarse_face_sd
+       << " (SD of ln area ratio); above " << limits.max_element_cv << " where elements hold fewer than "
+       << std::lround(std::pow(3 * limits.coarse_face_sd / limits.max_element_cv, 2)) << " faces (here " << std::lround(faces_per_element) << ")";
+  deviation_rule << "every element's area / mean area within 1 +- max(" << limits.max_element_deviation << ", 8 x "
+                 << limits.coarse_face_sd << " / sqrt(faces per element))";
   return {{"passed", problem.empty()},
           {"problem", problem},
           {"limits",
            {{"flips", 0},
             {"element_cv_" + grid, cv},
             {"element_cv_rule", rule.str()},
+            {"element_area_over_mean_deviation_" + grid, deviation},
+            {"element_area_over_mean_deviation_rule", deviation_rule.str()},
             {"vertex_ln_area_abs_mean", limits.max_vertex_ln_area}}}};
 }
 

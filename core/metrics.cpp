@@ -255,16 +255,28 @@ double element_cv_limit(const MapMetrics& m, const AuthalicAcceptance& limits) {
   return element_cv_limit(m.faces, m.element_cols * m.element_rows, limits);
 }
 
+double element_deviation_limit(const MapMetrics& m, const AuthalicAcceptance& limits) {
+  // The largest of #elements draws of a good map's element noise lies within about 3.5 of its
+  // standard errors; 8 leave room for the mesh's own irregularity.
+  const double faces_per_element = double(m.faces) / std::max(1, m.element_cols * m.element_rows);
+  return std::max(limits.max_element_deviation, 8.0 * limits.coarse_face_sd / std::sqrt(std::max(1.0, faces_per_element)));
+}
+
 std::string authalic_acceptance_problem(const MapMetrics& m, double vertex_mean, bool check_element_cv,
                                         const AuthalicAcceptance& limits) {
-  const double cv_limit = element_cv_limit(m, limits);
+  const double cv_limit = element_cv_limit(m, limits), deviation_limit = element_deviation_limit(m, limits);
   const bool cv_bad = check_element_cv && !(m.element_cv <= cv_limit);
+  const double deviation = std::max(m.element_max - 1.0, 1.0 - m.element_min);
+  const bool element_bad = check_element_cv && !(deviation <= deviation_limit);
   const bool vertex_bad = !(vertex_mean <= limits.max_vertex_ln_area);
-  if (m.flips == 0 && !cv_bad && !vertex_bad) return {};
+  if (m.flips == 0 && !cv_bad && !element_bad && !vertex_bad) return {};
   std::ostringstream s;
   s << m.flips << " flipped triangles (limit 0), element CV " << m.element_cv << " (" << m.element_cols << "x"
-    << m.element_rows << (check_element_cv ? ", limit " + std::to_string(cv_limit).substr(0, 6) : ", not checked")
-    << "), per-vertex mean |ln area ratio| " << vertex_mean << " (limit " << limits.max_vertex_ln_area << ")";
+    << m.element_rows << (check_element_cv ? ", limit " + std::to_string(cv_limit).substr(0, 6) : ", not checked") << ")";
+  if (element_bad)
+    s << ", an element holding " << (m.element_max - 1.0 >= 1.0 - m.element_min ? m.element_max : m.element_min)
+      << " x the mean area (limit 1 +- " << deviation_limit << ")";
+  s << ", per-vertex mean |ln area ratio| " << vertex_mean << " (limit " << limits.max_vertex_ln_area << ")";
   return s.str();
 }
 

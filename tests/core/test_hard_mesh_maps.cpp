@@ -432,8 +432,16 @@ TEST(HardMeshMaps, AcceptanceRuleNamesEachFailedLimit) {
   m.faces = 300000;
   m.element_cols = m.element_rows = 32;
   m.element_cv = 0.004;
+  m.element_min = 0.97;
+  m.element_max = 1.04;
   m.face_ln_area_sd = 5.0;  // a broken map's noise must not loosen its own limit
   EXPECT_EQ(authalic_acceptance_problem(m, 0.005, true), "");
+  m.element_max = 1.35;  // a pocket: one element at 1.35 x the mean, within the CV limit
+  EXPECT_NE(authalic_acceptance_problem(m, 0.005, true).find("an element holding 1.35 x the mean area (limit 1 +- 0.25)"),
+            std::string::npos)
+      << authalic_acceptance_problem(m, 0.005, true);
+  EXPECT_EQ(authalic_acceptance_problem(m, 0.005, false), "");  // measure control: elements are meant to differ
+  m.element_max = 1.04;
   m.flips = 3;
   EXPECT_NE(authalic_acceptance_problem(m, 0.005, true).find("3 flipped triangles"), std::string::npos);
   m.flips = 0;
@@ -441,6 +449,10 @@ TEST(HardMeshMaps, AcceptanceRuleNamesEachFailedLimit) {
   EXPECT_NE(authalic_acceptance_problem(m, 0.005, true).find("element CV 0.02"), std::string::npos);
   EXPECT_EQ(authalic_acceptance_problem(m, 0.005, false), "");  // measure control: CV not checked
   EXPECT_NE(authalic_acceptance_problem(m, 0.02, false).find("per-vertex mean |ln area ratio| 0.02"), std::string::npos);
-  m.faces = 2048;  // 2 faces per element: 3 x 0.1 / sqrt(2) = 0.21 allowed
+  m.faces = 2048;  // 2 faces per element: 3 x 0.1 / sqrt(2) = 0.21 allowed, elements within 8 x 0.1 / sqrt(2) = 0.57
   EXPECT_EQ(authalic_acceptance_problem(m, 0.005, true), "");
+  m.element_max = 1.5;
+  EXPECT_EQ(authalic_acceptance_problem(m, 0.005, true), "");
+  m.element_max = 1.6;
+  EXPECT_NE(authalic_acceptance_problem(m, 0.005, true).find("an element holding 1.6 x"), std::string::npos);
 }
