@@ -282,13 +282,11 @@ std::string choose_correspondence(Hemisphere (&hemis)[2], const SubjectInputs& i
                                ".sphere.reg (FreeSurfer's surf/?h.sphere.reg, or --lh-sphere-reg/--rh-sphere-reg): the maps "
                                "were registered to the atlas's by sulcal depth (mode 'registration'), not carried through "
                                "FreeSurfer's registration; compare them only with a reference built in registration mode");
-  std::string mode = registered ? "registration" : "atlas";
   for (Hemisphere& h : hemis) {
     h.sphere_reg = registered ? "" : (h.left ? in.lh_sphere_reg : in.rh_sphere_reg);
     h.atlas = std::make_unique<Atlas>(load_atlas(atlas_files_from_dir(options.atlas_dir, h.left ? "lh" : "rh"), progress));
-    mode += (h.left ? " " : "+") + h.atlas->identity;
   }
-  return mode;
+  return correspondence_mode(in, options);
 }
 
 // The step: the mode, logged, and refused before minutes of mapping when the reference (if any) was
@@ -1155,6 +1153,13 @@ void swap_into_place(const fs::path& stage, const fs::path& final_dir, const Run
 }
 
 }  // namespace
+
+std::string correspondence_mode(const SubjectInputs& in, const RunOptions& options) {
+  if (options.atlas_dir.empty()) return kPerSubjectCorrespondence;
+  const bool registered = in.lh_sphere_reg.empty() || in.rh_sphere_reg.empty();
+  return std::string(registered ? "registration" : "atlas") + " " + atlas_identity(atlas_files_from_dir(options.atlas_dir, "lh")) +
+         "+" + atlas_identity(atlas_files_from_dir(options.atlas_dir, "rh"));
+}
 
 RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const ProgressFn& progress) {
   check_id(in.id);
