@@ -572,12 +572,18 @@ ReportNormative report_normative(const NormativeReference& reference, const Subj
   n.present = true;
   n.num_subjects = static_cast<int>(reference.subjects.size());
   double lo = 1e300, hi = -1e300;
+  int known = 0;
   for (const NormativeSubject& s : reference.subjects)
     if (std::isfinite(s.age)) {
       lo = std::min(lo, s.age);
       hi = std::max(hi, s.age);
+      ++known;
     }
-  if (hi >= lo) n.age_range = human_number(lo) + "-" + human_number(hi) + " years" + (cmp.age_adjusted ? " (z age adjusted)" : "");
+  // The range alone read as the ages the z-scores were adjusted for: say whether they were.
+  if (hi >= lo)
+    n.age_range = human_number(lo) + "-" + human_number(hi) + " years" +
+                  (known < n.num_subjects ? " (" + std::to_string(known) + " of " + std::to_string(n.num_subjects) + " known)" : "") +
+                  (cmp.age_adjusted ? " (z age adjusted)" : " (z NOT age adjusted)");
   n.normalisation = reference.normalisation;
   n.domain = "square, K = " + std::to_string(reference.grid.k);
   n.correspondence = "element by element on the authalic square (the same K x K grid in every subject)";
@@ -881,11 +887,10 @@ Comparison compare_step(const NormativeReference& reference, const ElementTable&
   const int dropped = drop_small_clusters(cmp, options.min_cluster_elements);
   if (dropped > 0)
     log.note(std::to_string(dropped) + " clusters of fewer than " + std::to_string(options.min_cluster_elements) + " elements not reported");
-  for (const std::string& n : cmp.notes) log.note(n);
-  // z silently not age adjusted would read as adjusted (issue 15: up to 1.2 in z at 75 years).
-  if (has_age_model(reference) && !cmp.age_adjusted)
-    summary.warnings.push_back("the reference " + in.normative +
-                               " has an age model but the subject's age is unknown (--age): z-scores are NOT age adjusted");
+  // Each note qualifies every z-score (the subject is one of the controls; z not age adjusted and
+  // why, issue 15: up to 1.2 in z at 75 years): warnings, so they reach stderr, the JSON and the
+  // report, not only the log.
+  for (const std::string& n : cmp.notes) summary.warnings.push_back(n);
   log.note_new_warnings(summary.warnings);
   summary.abnormal_elements = cmp.num_hypo + cmp.num_hyper;
   summary.clusters = static_cast<int>(cmp.clusters.size());

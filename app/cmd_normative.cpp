@@ -52,9 +52,9 @@ void print_reference_summary(const analysis::NormativeReference& r, const std::s
   info("authalic normative: " + path + ": " + std::to_string(r.subjects.size()) + " subjects, " + to_string(r.grid.domain) +
        " K = " + std::to_string(r.grid.k) + ", " + std::to_string(r.hemispheres.size()) + " hemisphere block(s), normalisation " +
        r.normalisation +
-       (analysis::has_age_model(r) ? ", age model"
-        : r.age_model              ? ", no age model (" + analysis::age_model_absent_reason(r) + ")"
-                                   : ", no age model"));
+       (analysis::has_age_model(r)                    ? ", age model"
+        : !analysis::age_model_absent_reason(r).empty() ? ", no age model (" + analysis::age_model_absent_reason(r) + ")"
+                                                        : ", no age model"));
   if (global_options().json) {
     nlohmann::json j;
     j["output"] = path;
@@ -65,7 +65,7 @@ void print_reference_summary(const analysis::NormativeReference& r, const std::s
     j["normalisation"] = r.normalisation;
     j["units"] = r.units;
     j["age_model"] = analysis::has_age_model(r);
-    if (r.age_model && !analysis::has_age_model(r)) j["age_model_note"] = analysis::age_model_absent_reason(r);
+    if (!analysis::age_model_absent_reason(r).empty()) j["age_model_note"] = analysis::age_model_absent_reason(r);
     j["seconds"] = seconds;
     j["cpu_seconds"] = cpu_seconds;
     std::cout << j.dump(2) << '\n';
