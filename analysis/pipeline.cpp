@@ -42,6 +42,7 @@
 #include "io/freesurfer_annot.h"
 #include "io/image_io.h"
 #include "io/lock_file.h"
+#include "io/signal_cleanup.h"
 #include "io/registration.h"
 #include "io/surface_io.h"
 #include "io/workbench_spec.h"
@@ -426,7 +427,7 @@ json input_checksums(const SubjectInputs& in) {
 }
 
 // The output folder for the run's lifetime: created if missing, and removed again (only if still
-// empty) when the run fails, so that bad input leaves nothing behind.
+// empty) when the run fails or is ended by SIGTERM/SIGINT, so that bad input leaves nothing behind.
 class OutFolder {
  public:
   explicit OutFolder(const std::string& path) : path_(path) {
@@ -438,6 +439,7 @@ class OutFolder {
     fs::create_directories(path_, ec);
     if (ec) throw InputError(path_ + ": cannot create the output folder (" + ec.message() + ")");
     created_ = true;
+    on_signal_ = std::make_unique<io::RemovedOnSignal>(path_, io::RemovedOnSignal::Kind::FolderIfEmpty);
   }
   ~OutFolder() {
     std::error_code ec;
@@ -449,6 +451,30 @@ class OutFolder {
  private:
   std::string path_;
   bool created_ = false;
+  std::unique_ptr<io::RemovedOnSignal> on_signal_;
+};
+
+// The hidden folder the outputs are written into before it is renamed to sub-<id>.
+fs::path staging_folder(const RunOptions& options, const std::string& id) {
+  return fs::path(options.out_dir) / (".sub-" + id + ".partial-" + std::to_string(::getpid()));
+}
+
+// The staging folder is removed when the run fails (an exception: a bad BIDS sidecar found by the
+// report, a full disk) or is ended by SIGTERM/SIGINT/SIGHUP (Ctrl-C, a scheduler's time limit):
+// it was left behind until the next run of the same subject. SIGKILL still leaves it to that run.
+class StagingGuard {
+ public:
+  explicit StagingGuard(fs::path stage) : stage_(std::move(stage)), on_signal_(stage_.string(), io::RemovedOnSignal::Kind::FolderOfFiles) {}
+  ~StagingGuard() {
+    std::error_code ec;
+    if (std::uncaught_exceptions() > 0) fs::remove_all(stage_, ec);
+  }
+  StagingGuard(const StagingGuard&) = delete;
+  StagingGuard& operator=(const StagingGuard&) = delete;
+
+ private:
+  fs::path stage_;
+  io::RemovedOnSignal on_signal_;
 };
 
 // Staging (.sub-<id>.partial-<pid>) and swap (.sub-<id>.old-<pid>) folders left by runs that were
@@ -1101,7 +1127,7 @@ fs::path write_outputs(const Hemisphere (&hemis)[2], const SubjectInputs& in, co
                        const RunResults& r, StepLog& log, RunSummary& summary) {
   log.begin("write outputs");
   fs::create_directories(options.out_dir);
-  const fs::path stage = fs::path(options.out_dir) / (".sub-" + in.id + ".partial-" + std::to_string(::getpid()));
+  const fs::path stage = staging_folder(options, in.id);
   fs::remove_all(stage);
   fs::create_directories(stage);
   // The subject as BIDS participants.tsv describes one (null: not given).
@@ -1199,6 +1225,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   if (inputs.compare) cmp = compare_step(inputs.reference, table, in, options, log, summary);
   const json params = run_parameters(hemis, options, norm, inputs.compare, cmp, correspondence);
   const RunResults results{rect, rect_metrics, table, cmp, inputs.compare, params, inputs.checksums};
+  const StagingGuard staging(staging_folder(options, in.id));
   const fs::path stage = write_outputs(hemis, in, options, names, results, log, summary);
   if (options.report) report_step(hemis, in, options, names, results, inputs.reference, registration, stage, log, summary);
   io::write_file_atomically((stage / names.log()).string(), software_version() + "\nsubject sub-" + in.id + "\n" + log.text());
