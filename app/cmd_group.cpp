@@ -397,7 +397,7 @@ const bool registered = register_command({60, [](CLI::App& parent) {
   sub->add_option("cohort", args->cohort, "Cohort list (CSV)")->required()->check(CLI::ExistingFile);
   sub->add_option("out", args->out, "Output folder")->required();
   sub->add_option("--jobs,-j", args->jobs, "Subjects processed at once (the --threads, or all cores, are shared among them)")
-      ->check(CLI::PositiveNumber);
+      ->check(in_range(1, 256));
   add_k_option(*sub, args->k, {DomainKind::Square}, 2, 512);
   sub->add_flag("--force", args->force, "Write into an existing output folder");
   sub->add_option("--normalize", args->normalize,

@@ -327,7 +327,7 @@ const bool registered = register_command({40, [](CLI::App& parent) {
                   "information) and sample through that transform; without it the PET is assumed co-registered");
   sub->add_option("--map", a->map, "Flat map of SURFACE (e.g. from `authalic flatten`) for the PNG; default: 3D views");
   sub->add_option("--png", a->png, "PNG path (default: OUT with .png)");
-  sub->add_option("--frame", a->frame, "4D PET: the frame to sample (0-based)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--frame", a->frame, "4D PET: the frame to sample (0-based)")->check(in_range(0, 100000));
   sub->add_flag("--sum-frames", a->sum_frames, "4D PET: sum all frames (unweighted: frames of equal duration give a static image "
                                                "in the frames' units times their number)");
   add_common_options(*sub);
