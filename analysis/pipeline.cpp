@@ -653,7 +653,7 @@ ReportData report_data(const SubjectInputs& in, const RunOptions& options, const
   rd.subject_info = subject_rows(in);
   for (const std::string& w : summary.warnings) rd.notes.push_back("Warning: " + w + ".");
   for (const auto& [k, v] : params.items()) rd.parameters.emplace_back(k, v.is_string() ? v.get<std::string>() : v.dump());
-  rd.parameters.emplace_back("minimum cluster size", std::to_string(options.min_cluster_elements) + " elements");
+  if (cmp) rd.parameters.emplace_back("minimum cluster size", std::to_string(options.min_cluster_elements) + " elements");
   rd.quality = quality_rows(hemis, options, registration);
   const int K = options.k;
   for (int b = 0; b < 2; ++b) {
@@ -960,14 +960,17 @@ struct OutputSink {
 // The run's parameters as every sidecar records them.
 json run_parameters(const Hemisphere (&hemis)[2], const RunOptions& options, const Normalisation& norm, bool compare,
                     const Comparison& cmp, const std::string& correspondence) {
-  return {{"k", options.k},
-          {"depth_mm", options.depth_mm},
-          {"sampling", hemis[0].sampling.method},
-          {"normalisation", norm.description.empty() ? "none" : norm.description},
-          {"z_threshold", options.z_threshold},
-          {"z_age_adjusted", compare && cmp.age_adjusted},
-          {"rescale_to_reference", options.rescale},
-          {"correspondence", correspondence}};
+  json j = {{"k", options.k},
+            {"depth_mm", options.depth_mm},
+            {"sampling", hemis[0].sampling.method},
+            {"normalisation", norm.description.empty() ? "none" : norm.description},
+            {"correspondence", correspondence}};
+  if (compare) {  // without a reference there are no z-scores for these to describe
+    j["z_threshold"] = options.z_threshold;
+    j["z_age_adjusted"] = cmp.age_adjusted;
+    j["rescale_to_reference"] = options.rescale;
+  }
+  return j;
 }
 
 // The subject's white and pial surfaces and its flat map (scaled so 1 mm^2 flat = 1 mm^2 cortex

@@ -187,8 +187,9 @@ void viewer_section(std::ostringstream& out, const ReportData& d) {
   }
   if (hemis.size() > kViewerDataBudget) {
     out << "<p class=\"muted\">Not included: the surfaces (" << hemis.size() / 1000000
-        << " MB) would push this page past its 8 MB budget. The pictures above show the same data; the surfaces and z "
-           "open in Connectome Workbench (sub-&lt;id&gt;_workbench.spec).</p>\n</section>\n";
+        << " MB) would push this page past its 8 MB budget. The pictures above show the same data; the surfaces, PET"
+        << (d.normative.present ? " and z" : "") << " open in Connectome Workbench (wb_view "
+        << html_escape("sub-" + d.subject_id + "_workbench.spec") << ").</p>\n</section>\n";
     return;
   }
   std::vector<double> pet;

@@ -1,4 +1,4 @@
-// qa4_cli D6, D7: what qualifies every z-score of a run (the subject is one of the reference's own
+// qa4_cli D6, D7, D14: what qualifies every z-score of a run (the subject is one of the reference's own
 // controls; the reference's age model cannot be used, and why) reaches run's JSON warnings, stderr
 // and the report, not only the log; the report header does not present the controls' age range as
 // the ages z was adjusted for when it was not.
@@ -78,6 +78,22 @@ TEST(RunWarningsCli, ReferenceWithAControlWithoutAgeSaysZIsNotAgeAdjusted) {
       << out;
   EXPECT_TRUE(nlohmann::json::parse(out.substr(out.find('{')))["warnings"].empty()) << out;
   EXPECT_NE(read_text(dir + "/a/sub-patient01/sub-patient01_report.html").find("50.3-78 years (z age adjusted)"), std::string::npos);
+}
+
+// qa4_cli D14: a PET-only report (no --normative) spoke of z-scores: the disclaimer said they
+// compare the scan with controls, and the parameters listed the z threshold, the rescaling to the
+// reference and the minimum cluster size.
+TEST(RunWarningsCli, PetOnlyReportHasNoZScoreText) {
+  const std::string dir = test::temp_dir("run-pet-only");
+  std::string out;
+  ASSERT_EQ(test::run_command(run_args("patient01", dir) + " --quiet", &out), 0) << out;
+  const std::string html = read_text(dir + "/sub-patient01/sub-patient01_report.html");
+  EXPECT_NE(html.find("the PET values are shown on the cortex without a comparison with control subjects"), std::string::npos);
+  for (const char* z_text : {"the z-scores compare", "z_threshold", "rescale_to_reference", "minimum cluster size", "z_age_adjusted"})
+    EXPECT_EQ(html.find(z_text), std::string::npos) << z_text;
+  const std::string sidecar = read_text(dir + "/sub-patient01/sub-patient01_hemi-L_pet.json");
+  ASSERT_NE(sidecar.find("\"parameters\""), std::string::npos) << sidecar;
+  EXPECT_EQ(sidecar.find("z_threshold"), std::string::npos) << sidecar;
 }
 
 }  // namespace
