@@ -497,7 +497,7 @@ void check_reference_usable(const NormativeReference& r, const std::string& what
   const int controls = static_cast<int>(r.subjects.size());
   if (controls < kMinControls)
     throw InputError(what + ": " + std::to_string(controls) + " control(s); a normative reference needs at least " +
-                     std::to_string(kMinControls) + " (fewer give no normal range to compare with): add control tables");
+                     std::to_string(kMinControls) + " (fewer give no normal range to compare with): add controls (their element tables, or references to merge)");
   if (usable_elements(r, kMinControls) == 0)
     throw InputError(what + ": no element has " + std::to_string(kMinControls) +
                      " or more controls with values that vary (SD > 0); every z-score would be undefined: check the "

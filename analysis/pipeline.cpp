@@ -151,6 +151,10 @@ void check_anatomy(const Hemisphere (&hemis)[2], const SubjectInputs& in) {
       throw InputError(s.str());
     }
   }
+  // One file as both hemispheres would read as "left and right swapped" (it lies at its own x).
+  std::error_code ec;
+  if (fs::equivalent(in.lh_white, in.rh_white, ec))
+    throw InputError(in.rh_white + ": the same file was given as --lh-white and --rh-white; give each hemisphere its own surface");
   const double lx = hemis[0].white.mesh.V.col(0).mean(), rx = hemis[1].white.mesh.V.col(0).mean();
   if (!(lx < rx)) {
     std::ostringstream s;

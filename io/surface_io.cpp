@@ -125,6 +125,7 @@ VectorXd parse_text_values(const std::string& text, const std::string& path) {
 }
 
 void check_length(const std::string& path, Eigen::Index n, int expected_vertices) {
+  if (expected_vertices > 0 && n == 0) fail(path, "holds no values (the file is empty)", "give the per-vertex file of this surface");
   if (expected_vertices >= 0 && n != expected_vertices)
     fail(path, "has " + std::to_string(n) + " values but the surface has " + std::to_string(expected_vertices) + " vertices",
          "use the per-vertex file that belongs to this surface");
