@@ -117,8 +117,9 @@ void trace_inserted_vertices(ElementMap& m, const MatrixXi& F_surface, const std
                      candidates.end());
     if (candidates.size() != 1)
       throw InputError(map_name + ": map vertex " + std::to_string(w) + " (appended by the flattening) cannot be traced to " +
-                       (candidates.empty() ? std::string("a") : std::string("a unique")) +
-                       " surface edge it splits; give the map computed from this surface (its vertices first, in order)");
+                       (candidates.empty() ? std::string("a") : std::string("a unique")) + " surface edge it splits (the map has " +
+                       std::to_string(nm) + " vertices, the surface " + std::to_string(nv) +
+                       "); give the map computed from this surface (its vertices first, in order)");
     const int p = candidates[0].first.first, q = candidates[0].first.second;
     const bool boundary_edge = current.count({p, q}) + current.count({q, p}) == 1;
     double t = 0.5;  // ear split: the 3D midpoint (core/conformal_map.h)

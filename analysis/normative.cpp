@@ -497,7 +497,7 @@ void check_reference_usable(const NormativeReference& r, const std::string& what
   const int controls = static_cast<int>(r.subjects.size());
   if (controls < kMinControls)
     throw InputError(what + ": " + std::to_string(controls) + " control(s); a normative reference needs at least " +
-                     std::to_string(kMinControls) + " (fewer give no normal range to compare with): add control tables");
+                     std::to_string(kMinControls) + " (fewer give no normal range to compare with): add controls (their element tables, or references to merge)");
   if (usable_elements(r, kMinControls) == 0)
     throw InputError(what + ": no element has " + std::to_string(kMinControls) +
                      " or more controls with values that vary (SD > 0); every z-score would be undefined: check the "
@@ -612,7 +612,7 @@ Comparison compare_elements(const NormativeReference& ref, const ElementTable& p
   const bool age_model = has_age_model(ref, options.age_model_min_controls);
   out.age_adjusted = options.use_age && age_model && std::isfinite(out.patient_age);
   if (options.use_age && age_model && !std::isfinite(out.patient_age))
-    out.notes.push_back("the reference has an age model but the patient's age is unknown: z-scores are not age-adjusted");
+    out.notes.push_back(options.reference_name + " has an age model but the patient's age is unknown (--age): z-scores are NOT age adjusted");
   if (ref.normalisation == "reference-region" && ref.reference_mask.empty() != table_reference_mask(patient).empty())
     out.notes.push_back(std::string(ref.reference_mask.empty() ? "the reference" : "the patient's table") +
                         " does not record its reference-region mask (made before 2026-12-07): that both were normalised with "
@@ -624,8 +624,8 @@ Comparison compare_elements(const NormativeReference& ref, const ElementTable& p
       out.notes.push_back("the patient's age " + format_value(out.patient_age) + " is outside the controls' ages (" + format_value(lo) +
                           "-" + format_value(hi) + " years): the age model extrapolates, and its expected values are less certain");
   }
-  if (options.use_age && ref.age_model && !age_model)
-    out.notes.push_back(age_model_absent_reason(ref, options.age_model_min_controls) + ": no age model, z-scores are not age-adjusted");
+  if (const std::string why = age_model_absent_reason(ref, options.age_model_min_controls); options.use_age && !why.empty())
+    out.notes.push_back(why + ": no age model, z-scores are NOT age adjusted");
   for (const auto& s : ref.subjects)
     if (!patient.subject_id.empty() && s.id == patient.subject_id)
       out.notes.push_back("subject '" + s.id + "' is one of the reference's controls: its z-scores are biased toward 0");
@@ -995,7 +995,18 @@ bool has_age_model(const NormativeReference& ref, int min_controls) {
 }
 
 std::string age_model_absent_reason(const NormativeReference& ref, int min_controls) {
-  if (!ref.age_model) return "";
+  if (!ref.age_model) {
+    // Ages were given, but not for every control: one missing age drops the whole model.
+    std::vector<std::string> without;
+    for (const auto& s : ref.subjects)
+      if (!std::isfinite(s.age)) without.push_back(s.id);
+    if (without.empty() || without.size() == ref.subjects.size()) return "";
+    std::string names = "'" + without[0] + "'";
+    for (std::size_t i = 1; i < std::min<std::size_t>(without.size(), 3); ++i) names += ", '" + without[i] + "'";
+    if (without.size() > 3) names += " and " + std::to_string(without.size() - 3) + " more";
+    return std::to_string(without.size()) + " of the reference's " + std::to_string(ref.subjects.size()) + " controls (" + names +
+           ") have no age; the age model needs every control's age";
+  }
   if (static_cast<int>(ref.subjects.size()) < min_controls)
     return "the reference has " + std::to_string(ref.subjects.size()) + " controls; the age model needs at least " +
            std::to_string(min_controls) + " (a line through fewer leaves too few degrees of freedom for its SD)";

@@ -134,7 +134,8 @@ bool has_age_model(const NormativeReference& ref, int min_controls = kMinAgeMode
 // freedom (n - 2 with the age model); the plain SD's z is sqrt(1 + 1/n) times such a t (taking the
 // age term of the inflation as 0). E.g. 6 controls, threshold 2: 10.2 %; 20 controls: 6.0 %.
 double expected_abnormal_share(int controls, bool age_model, bool predictive, double threshold);
-// Why a reference with ages has no age model ("" when it has one or has no ages).
+// Why a reference has no usable age model: too few controls, all of one age, or some controls
+// without an age (named); "" when it has one or when no control has an age.
 std::string age_model_absent_reason(const NormativeReference& ref, int min_controls = kMinAgeModelControls);
 
 // An empty reference shaped like `table` (grid, hemispheres, normalisation, units).

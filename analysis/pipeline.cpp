@@ -42,6 +42,7 @@
 #include "io/freesurfer_annot.h"
 #include "io/image_io.h"
 #include "io/lock_file.h"
+#include "io/signal_cleanup.h"
 #include "io/registration.h"
 #include "io/surface_io.h"
 #include "io/workbench_spec.h"
@@ -150,6 +151,10 @@ void check_anatomy(const Hemisphere (&hemis)[2], const SubjectInputs& in) {
       throw InputError(s.str());
     }
   }
+  // One file as both hemispheres would read as "left and right swapped" (it lies at its own x).
+  std::error_code ec;
+  if (fs::equivalent(in.lh_white, in.rh_white, ec))
+    throw InputError(in.rh_white + ": the same file was given as --lh-white and --rh-white; give each hemisphere its own surface");
   const double lx = hemis[0].white.mesh.V.col(0).mean(), rx = hemis[1].white.mesh.V.col(0).mean();
   if (!(lx < rx)) {
     std::ostringstream s;
@@ -282,13 +287,11 @@ std::string choose_correspondence(Hemisphere (&hemis)[2], const SubjectInputs& i
                                ".sphere.reg (FreeSurfer's surf/?h.sphere.reg, or --lh-sphere-reg/--rh-sphere-reg): the maps "
                                "were registered to the atlas's by sulcal depth (mode 'registration'), not carried through "
                                "FreeSurfer's registration; compare them only with a reference built in registration mode");
-  std::string mode = registered ? "registration" : "atlas";
   for (Hemisphere& h : hemis) {
     h.sphere_reg = registered ? "" : (h.left ? in.lh_sphere_reg : in.rh_sphere_reg);
     h.atlas = std::make_unique<Atlas>(load_atlas(atlas_files_from_dir(options.atlas_dir, h.left ? "lh" : "rh"), progress));
-    mode += (h.left ? " " : "+") + h.atlas->identity;
   }
-  return mode;
+  return correspondence_mode(in, options);
 }
 
 // The step: the mode, logged, and refused before minutes of mapping when the reference (if any) was
@@ -428,7 +431,7 @@ json input_checksums(const SubjectInputs& in) {
 }
 
 // The output folder for the run's lifetime: created if missing, and removed again (only if still
-// empty) when the run fails, so that bad input leaves nothing behind.
+// empty) when the run fails or is ended by SIGTERM/SIGINT, so that bad input leaves nothing behind.
 class OutFolder {
  public:
   explicit OutFolder(const std::string& path) : path_(path) {
@@ -440,6 +443,7 @@ class OutFolder {
     fs::create_directories(path_, ec);
     if (ec) throw InputError(path_ + ": cannot create the output folder (" + ec.message() + ")");
     created_ = true;
+    on_signal_ = std::make_unique<io::RemovedOnSignal>(path_, io::RemovedOnSignal::Kind::FolderIfEmpty);
   }
   ~OutFolder() {
     std::error_code ec;
@@ -451,6 +455,30 @@ class OutFolder {
  private:
   std::string path_;
   bool created_ = false;
+  std::unique_ptr<io::RemovedOnSignal> on_signal_;
+};
+
+// The hidden folder the outputs are written into before it is renamed to sub-<id>.
+fs::path staging_folder(const RunOptions& options, const std::string& id) {
+  return fs::path(options.out_dir) / (".sub-" + id + ".partial-" + std::to_string(::getpid()));
+}
+
+// The staging folder is removed when the run fails (an exception: a bad BIDS sidecar found by the
+// report, a full disk) or is ended by SIGTERM/SIGINT/SIGHUP (Ctrl-C, a scheduler's time limit):
+// it was left behind until the next run of the same subject. SIGKILL still leaves it to that run.
+class StagingGuard {
+ public:
+  explicit StagingGuard(fs::path stage) : stage_(std::move(stage)), on_signal_(stage_.string(), io::RemovedOnSignal::Kind::FolderOfFiles) {}
+  ~StagingGuard() {
+    std::error_code ec;
+    if (std::uncaught_exceptions() > 0) fs::remove_all(stage_, ec);
+  }
+  StagingGuard(const StagingGuard&) = delete;
+  StagingGuard& operator=(const StagingGuard&) = delete;
+
+ private:
+  fs::path stage_;
+  io::RemovedOnSignal on_signal_;
 };
 
 // Staging (.sub-<id>.partial-<pid>) and swap (.sub-<id>.old-<pid>) folders left by runs that were
@@ -574,12 +602,18 @@ ReportNormative report_normative(const NormativeReference& reference, const Subj
   n.present = true;
   n.num_subjects = static_cast<int>(reference.subjects.size());
   double lo = 1e300, hi = -1e300;
+  int known = 0;
   for (const NormativeSubject& s : reference.subjects)
     if (std::isfinite(s.age)) {
       lo = std::min(lo, s.age);
       hi = std::max(hi, s.age);
+      ++known;
     }
-  if (hi >= lo) n.age_range = human_number(lo) + "-" + human_number(hi) + " years" + (cmp.age_adjusted ? " (z age adjusted)" : "");
+  // The range alone read as the ages the z-scores were adjusted for: say whether they were.
+  if (hi >= lo)
+    n.age_range = human_number(lo) + "-" + human_number(hi) + " years" +
+                  (known < n.num_subjects ? " (" + std::to_string(known) + " of " + std::to_string(n.num_subjects) + " known)" : "") +
+                  (cmp.age_adjusted ? " (z age adjusted)" : " (z NOT age adjusted)");
   n.normalisation = reference.normalisation;
   n.domain = "square, K = " + std::to_string(reference.grid.k);
   n.correspondence = "element by element on the authalic square (the same K x K grid in every subject)";
@@ -623,7 +657,7 @@ ReportData report_data(const SubjectInputs& in, const RunOptions& options, const
   rd.subject_info = subject_rows(in);
   for (const std::string& w : summary.warnings) rd.notes.push_back("Warning: " + w + ".");
   for (const auto& [k, v] : params.items()) rd.parameters.emplace_back(k, v.is_string() ? v.get<std::string>() : v.dump());
-  rd.parameters.emplace_back("minimum cluster size", std::to_string(options.min_cluster_elements) + " elements");
+  if (cmp) rd.parameters.emplace_back("minimum cluster size", std::to_string(options.min_cluster_elements) + " elements");
   rd.quality = quality_rows(hemis, options, registration);
   const int K = options.k;
   for (int b = 0; b < 2; ++b) {
@@ -883,11 +917,10 @@ Comparison compare_step(const NormativeReference& reference, const ElementTable&
   const int dropped = drop_small_clusters(cmp, options.min_cluster_elements);
   if (dropped > 0)
     log.note(std::to_string(dropped) + " clusters of fewer than " + std::to_string(options.min_cluster_elements) + " elements not reported");
-  for (const std::string& n : cmp.notes) log.note(n);
-  // z silently not age adjusted would read as adjusted (issue 15: up to 1.2 in z at 75 years).
-  if (has_age_model(reference) && !cmp.age_adjusted)
-    summary.warnings.push_back("the reference " + in.normative +
-                               " has an age model but the subject's age is unknown (--age): z-scores are NOT age adjusted");
+  // Each note qualifies every z-score (the subject is one of the controls; z not age adjusted and
+  // why, issue 15: up to 1.2 in z at 75 years): warnings, so they reach stderr, the JSON and the
+  // report, not only the log.
+  for (const std::string& n : cmp.notes) summary.warnings.push_back(n);
   log.note_new_warnings(summary.warnings);
   summary.abnormal_elements = cmp.num_hypo + cmp.num_hyper;
   summary.clusters = static_cast<int>(cmp.clusters.size());
@@ -931,14 +964,17 @@ struct OutputSink {
 // The run's parameters as every sidecar records them.
 json run_parameters(const Hemisphere (&hemis)[2], const RunOptions& options, const Normalisation& norm, bool compare,
                     const Comparison& cmp, const std::string& correspondence) {
-  return {{"k", options.k},
-          {"depth_mm", options.depth_mm},
-          {"sampling", hemis[0].sampling.method},
-          {"normalisation", norm.description.empty() ? "none" : norm.description},
-          {"z_threshold", options.z_threshold},
-          {"z_age_adjusted", compare && cmp.age_adjusted},
-          {"rescale_to_reference", options.rescale},
-          {"correspondence", correspondence}};
+  json j = {{"k", options.k},
+            {"depth_mm", options.depth_mm},
+            {"sampling", hemis[0].sampling.method},
+            {"normalisation", norm.description.empty() ? "none" : norm.description},
+            {"correspondence", correspondence}};
+  if (compare) {  // without a reference there are no z-scores for these to describe
+    j["z_threshold"] = options.z_threshold;
+    j["z_age_adjusted"] = cmp.age_adjusted;
+    j["rescale_to_reference"] = options.rescale;
+  }
+  return j;
 }
 
 // The subject's white and pial surfaces and its flat map (scaled so 1 mm^2 flat = 1 mm^2 cortex
@@ -1098,7 +1134,7 @@ fs::path write_outputs(const Hemisphere (&hemis)[2], const SubjectInputs& in, co
                        const RunResults& r, StepLog& log, RunSummary& summary) {
   log.begin("write outputs");
   fs::create_directories(options.out_dir);
-  const fs::path stage = fs::path(options.out_dir) / (".sub-" + in.id + ".partial-" + std::to_string(::getpid()));
+  const fs::path stage = staging_folder(options, in.id);
   fs::remove_all(stage);
   fs::create_directories(stage);
   // The subject as BIDS participants.tsv describes one (null: not given).
@@ -1156,6 +1192,13 @@ void swap_into_place(const fs::path& stage, const fs::path& final_dir, const Run
 
 }  // namespace
 
+std::string correspondence_mode(const SubjectInputs& in, const RunOptions& options) {
+  if (options.atlas_dir.empty()) return kPerSubjectCorrespondence;
+  const bool registered = in.lh_sphere_reg.empty() || in.rh_sphere_reg.empty();
+  return std::string(registered ? "registration" : "atlas") + " " + atlas_identity(atlas_files_from_dir(options.atlas_dir, "lh")) +
+         "+" + atlas_identity(atlas_files_from_dir(options.atlas_dir, "rh"));
+}
+
 RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const ProgressFn& progress) {
   check_id(in.id);
   if (options.out_dir.empty()) throw InputError("--out: no output folder given");
@@ -1189,6 +1232,7 @@ RunSummary run_subject(const SubjectInputs& in, const RunOptions& options, const
   if (inputs.compare) cmp = compare_step(inputs.reference, table, in, options, log, summary);
   const json params = run_parameters(hemis, options, norm, inputs.compare, cmp, correspondence);
   const RunResults results{rect, rect_metrics, table, cmp, inputs.compare, params, inputs.checksums};
+  const StagingGuard staging(staging_folder(options, in.id));
   const fs::path stage = write_outputs(hemis, in, options, names, results, log, summary);
   if (options.report) report_step(hemis, in, options, names, results, inputs.reference, registration, stage, log, summary);
   io::write_file_atomically((stage / names.log()).string(), software_version() + "\nsubject sub-" + in.id + "\n" + log.text());

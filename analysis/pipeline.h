@@ -108,6 +108,12 @@ struct RunSummary {
   std::vector<std::string> warnings;  // also in the log and the report
 };
 
+// The element correspondence mode a run with these inputs records (issue 14): "per-subject"
+// without --atlas; with it "atlas <lh identity>+<rh identity>" when both sphere.reg are given, else
+// "registration ...". Reads only the atlas files' checksums, so `group` can check a cohort's modes
+// before any map. Throws InputError for an atlas folder without its files.
+std::string correspondence_mode(const SubjectInputs& inputs, const RunOptions& options);
+
 // Runs the pipeline. Throws InputError (bad input, nothing written) or ProcessingError.
 RunSummary run_subject(const SubjectInputs& inputs, const RunOptions& options, const ProgressFn& progress = {});
 

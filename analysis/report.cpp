@@ -90,9 +90,12 @@ std::string capitalised(std::string s) {
 
 }  // namespace
 
-const char* const kReportDisclaimer =
-    "Decision support, not a diagnosis: the z-scores compare this scan with a reference of control subjects and must "
-    "be read by a qualified physician together with the clinical history, the images themselves and other findings.";
+std::string report_disclaimer(const ReportNormative& normative) {
+  return std::string("Decision support, not a diagnosis: ") +
+         (normative.present ? "the z-scores compare this scan with a reference of control subjects and must"
+                            : "the PET values are shown on the cortex without a comparison with control subjects and must") +
+         " be read by a qualified physician together with the clinical history, the images themselves and other findings.";
+}
 
 KeyValues reference_rows(const ReportNormative& n) {
   if (!n.present) return {{"reference", "none (PET only, no z-scores)"}};
@@ -155,7 +158,7 @@ void summary_section(std::ostringstream& out, const ReportData& d) {
   out << "<section id=\"summary\">\n<h2>Findings</h2>\n<p class=\"summary\">"
       << html_escape(d.summary.empty() ? (d.normative.present ? "No summary." : "PET only: no normative reference, no z-scores.")
                                        : d.summary)
-      << "</p>\n<p class=\"disclaimer\">" << html_escape(kReportDisclaimer) << "</p>\n</section>\n";
+      << "</p>\n<p class=\"disclaimer\">" << html_escape(report_disclaimer(d.normative)) << "</p>\n</section>\n";
 }
 
 void figure_list(std::ostringstream& out, const std::vector<ReportFigure>& figures) {

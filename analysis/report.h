@@ -108,8 +108,9 @@ struct ReportData {
   std::string software;          // e.g. "authalic 0.1.0 (abc1234)"
 };
 
-// Shown on every report: what the numbers are and are not.
-extern const char* const kReportDisclaimer;
+// Shown on every report: what the numbers are and are not (a PET-only report has no z-scores to
+// speak of).
+std::string report_disclaimer(const ReportNormative& normative);
 // The reference described in rows (n, age range, normalisation, elements, correspondence, file
 // and software), for the header of both the HTML and the PDF.
 KeyValues reference_rows(const ReportNormative& normative);

@@ -122,7 +122,7 @@ void first_page(Page& p, const ReportData& d, const ReportFigures& f) {
   heading(p, "Findings");
   p.y += p.cv.paragraph(p.left, p.y, p.width, d.summary.empty() ? "PET only: no normative reference, no z-scores." : d.summary,
                         style(10.5, true));
-  p.y += 2 + p.cv.paragraph(p.left, p.y, p.width, kReportDisclaimer, style(8.5, false, kGrey));
+  p.y += 2 + p.cv.paragraph(p.left, p.y, p.width, report_disclaimer(d.normative), style(8.5, false, kGrey));
   heading(p, "3D views");
   // Each view with its caption (what grey and magenta mean, as the HTML says).
   double captions = 0;
@@ -171,7 +171,7 @@ void second_page(Page& p, const ReportData& d, const ReportFigures& f) {
   // What ends the page: the quality and processing tables, then the disclaimer.
   const double half = p.width / 2 - 8;
   const double tail = heading_height() + std::max(key_values_height(half, d.quality), key_values_height(half, d.parameters)) + 6 +
-                      paragraph_height(p.width, kReportDisclaimer, 8.5);
+                      paragraph_height(p.width, report_disclaimer(d.normative), 8.5);
   heading(p, "Clusters of abnormal elements");
   if (!d.normative.present) {
     p.y += p.cv.paragraph(p.left, p.y, p.width, "No normative reference: no clusters.", style(kBody));
@@ -222,7 +222,7 @@ void second_page(Page& p, const ReportData& d, const ReportFigures& f) {
   const double a = key_values(p.cv, p.left, p.y, half, d.quality);
   const double b = key_values(p.cv, p.left + half + 16, p.y, half, d.parameters);
   p.y += std::max(a, b) + 6;
-  p.cv.paragraph(p.left, p.y, p.width, kReportDisclaimer, style(8.5, false, kGrey));
+  p.cv.paragraph(p.left, p.y, p.width, report_disclaimer(d.normative), style(8.5, false, kGrey));
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "analysis/render.h"
 #include "analysis/report_figures.h"
 #include "io/base64.h"
 
@@ -66,6 +67,22 @@ std::string hemisphere_json(const ReportHemisphere& h) {
          "\",\"pet\":\"" + base64_of(pet) + "\"}";
 }
 
+// The pictures' z colours (z_colouring: coolwarm over [-kReportZRange, kReportZRange]) at
+// |z| = kReportZRange * i / 50, i = 0..50, for the viewer: {"hypo": [[r,g,b],...], "hyper": [...]}.
+std::string z_colour_samples() {
+  std::ostringstream s;
+  for (const int sign : {-1, 1}) {
+    s << (sign < 0 ? "{\"hypo\":[" : ",\"hyper\":[");
+    for (int i = 0; i <= 50; ++i) {
+      const Rgb c = colormap("coolwarm", 0.5 + 0.5 * sign * i / 50.0);
+      s << (i ? "," : "") << "[" << int(c[0]) << "," << int(c[1]) << "," << int(c[2]) << "]";
+    }
+    s << "]";
+  }
+  s << "}";
+  return s.str();
+}
+
 // Builds the scene, wires the controls, and reports in #nv-status whether WebGL drew anything
 // (the count of non-background pixels, read back in the frame it was drawn).
 const char* kViewerScript = R"JS(
@@ -82,14 +99,31 @@ const char* kViewerScript = R"JS(
       '<Data>' + b64 + '</Data></DataArray></GIFTI>').buffer;
     const nv = new niivue.Niivue({ backColor: [1, 1, 1, 1], show3Dcrosshair: false, isColorbar: true });
     await nv.attachTo('nv-canvas');
+    // The z colours of the report's pictures (coolwarm over +-zmax, sampled in data.zcolours at
+    // |z| = zmax * i / (n - 1)) as Niivue colour maps from |z| = threshold (index 0) to zmax (255):
+    // made again when the threshold moves, so that a z has one colour everywhere in the report
+    // (Niivue's 'winter' ran dark blue at -2 to green at -5, the reverse of the pictures).
+    const zmap = (side, threshold) => {
+      const s = data.zcolours[side], key = 'authalic-' + side + '-' + threshold.toFixed(2);
+      const cm = { R: [], G: [], B: [], A: [], I: [] };
+      for (let i = 0; i < 32; ++i) {
+        const x = (threshold + (data.zmax - threshold) * i / 31) / data.zmax * (s.length - 1);
+        const j = Math.min(Math.floor(x), s.length - 2), f = x - j;
+        ['R', 'G', 'B'].forEach((c, k) => cm[c].push(Math.round(s[j][k] + f * (s[j + 1][k] - s[j][k]))));
+        cm.A.push(255);
+        cm.I.push(Math.round(255 * i / 31));
+      }
+      nv.addColormap(key, cm);
+      return key;
+    };
     nv.setSliceType(nv.sliceTypeRender);
     const meshes = [];
     for (const h of data.hemispheres) {
       const F = new Uint32Array(bytes(h.F));
       const m = new niivue.NVMesh(new Float32Array(bytes(h.V)), F, h.name, new Uint8Array([200, 200, 200, 255]), 1, true, nv.gl);
       const n = m.pts.length / 3;
-      const z = await niivue.NVMeshLoaders.readLayer(h.name + '_z.func.gii', gifti(h.z, n), m, 1, 'warm', 'winter', true,
-                                                     data.threshold, data.zmax);
+      const z = await niivue.NVMeshLoaders.readLayer(h.name + '_z.func.gii', gifti(h.z, n), m, 1, zmap('hyper', data.threshold),
+                                                     zmap('hypo', data.threshold), true, data.threshold, data.zmax);
       const pet = await niivue.NVMeshLoaders.readLayer(h.name + '_pet.func.gii', gifti(h.pet, n), m, 0, 'viridis', '', false,
                                                        data.pet[0], data.pet[1]);
       // One colour bar (the first hemisphere's z) rather than one per layer and hemisphere.
@@ -104,6 +138,8 @@ const char* kViewerScript = R"JS(
     const apply = async () => {
       shown.textContent = Number(slider.value).toFixed(1);
       for (const m of meshes) {
+        await nv.setMeshLayerProperty(m.id, 0, 'colormap', zmap('hyper', Number(slider.value)));
+        await nv.setMeshLayerProperty(m.id, 0, 'colormapNegative', zmap('hypo', Number(slider.value)));
         await nv.setMeshLayerProperty(m.id, 0, 'cal_min', Number(slider.value));
         await nv.setMeshLayerProperty(m.id, 0, 'opacity', overlay.value === 'z' ? 1 : 0);
         await nv.setMeshLayerProperty(m.id, 1, 'opacity', overlay.value === 'pet' ? 1 : 0);
@@ -114,10 +150,20 @@ const char* kViewerScript = R"JS(
     nv.drawScene();
     const gl = nv.gl, w = gl.drawingBufferWidth, h = gl.drawingBufferHeight, px = new Uint8Array(w * h * 4);
     gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
-    let drawn = 0;
-    for (let i = 0; i < px.length; i += 4) drawn += (px[i] < 250 || px[i + 1] < 250 || px[i + 2] < 250) ? 1 : 0;
+    let drawn = 0, coloured = 0;
+    const sum = [0, 0, 0];
+    for (let i = 0; i < px.length; i += 4) {
+      drawn += (px[i] < 250 || px[i + 1] < 250 || px[i + 2] < 250) ? 1 : 0;
+      const above_colour_bar = i / 4 >= w * Math.floor(h / 5);  // rows from the bottom
+      if (above_colour_bar && Math.max(px[i], px[i + 1], px[i + 2]) - Math.min(px[i], px[i + 1], px[i + 2]) > 40) {
+        ++coloured;
+        for (let k = 0; k < 3; ++k) sum[k] += px[i + k];
+      }
+    }
     status.textContent = 'interactive view ready: ' + drawn + ' pixels drawn';
     status.dataset.drawn = String(drawn);
+    // The mean colour of the overlay on the surface (coloured pixels above the colour bar), for checks.
+    if (coloured > 0) status.dataset.overlayColour = sum.map((s) => Math.round(s / coloured)).join(',');
   } catch (e) {
     status.textContent = 'interactive view unavailable: ' + e;
   }
@@ -141,8 +187,9 @@ void viewer_section(std::ostringstream& out, const ReportData& d) {
   }
   if (hemis.size() > kViewerDataBudget) {
     out << "<p class=\"muted\">Not included: the surfaces (" << hemis.size() / 1000000
-        << " MB) would push this page past its 8 MB budget. The pictures above show the same data; the surfaces and z "
-           "open in Connectome Workbench (sub-&lt;id&gt;_workbench.spec).</p>\n</section>\n";
+        << " MB) would push this page past its 8 MB budget. The pictures above show the same data; the surfaces, PET"
+        << (d.normative.present ? " and z" : "") << " open in Connectome Workbench (wb_view "
+        << html_escape("sub-" + d.subject_id + "_workbench.spec") << ").</p>\n</section>\n";
     return;
   }
   std::vector<double> pet;
@@ -150,9 +197,10 @@ void viewer_section(std::ostringstream& out, const ReportData& d) {
     for (Eigen::Index v = 0; v < h.pet.size(); ++v) pet.push_back(h.pet(v));
   const auto range = robust_range(Eigen::Map<const VectorXd>(pet.data(), static_cast<Eigen::Index>(pet.size())));
   std::ostringstream config;
-  config << "{\"threshold\":" << d.normative.threshold << ",\"zmax\":" << kReportZRange << ",\"pet\":[" << range.first << ","
-         << range.second << "],\"hemispheres\":[" << hemis << "]}";
-  out << "<p>Drag to rotate, scroll to zoom (Niivue, WebGL2). z: warm colours above +threshold, cool below \u2212threshold.</p>\n"
+  config << "{\"threshold\":" << d.normative.threshold << ",\"zmax\":" << kReportZRange << ",\"zcolours\":" << z_colour_samples()
+         << ",\"pet\":[" << range.first << "," << range.second << "],\"hemispheres\":[" << hemis << "]}";
+  out << "<p>Drag to rotate, scroll to zoom (Niivue, WebGL2). z in the colours of the pictures above: blue at or below "
+         "\u2212threshold, darker for lower z; red at or above +threshold.</p>\n"
       << "<p><label>overlay <select id=\"nv-overlay\"><option value=\"z\">z</option><option value=\"pet\">PET</option></select></label>"
       << " &#160; <label>|z| threshold <input id=\"nv-threshold\" type=\"range\" min=\"0\" max=\"5\" step=\"0.1\" value=\""
       << d.normative.threshold << "\" /></label> <span id=\"nv-threshold-value\">" << d.normative.threshold

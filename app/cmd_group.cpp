@@ -125,6 +125,7 @@ struct GroupArgs {
   bool rectangle = true, rescale = true;
   std::string normative;  // an existing reference for the patients: none is built from the controls
   std::string atlas;      // run --atlas: atlas correspondence for subjects with sphere.reg columns
+  bool check = false;     // only check the cohort and the options; write nothing
 };
 
 // The options of `run` that `group` passes on, as arguments.
@@ -151,18 +152,57 @@ std::vector<std::string> subject_args(const std::string& exe, const CohortSubjec
   return args;
 }
 
-// An existing reference given with --normative: read and checked against --k and --normalize
-// before any map is computed (a mismatch would only show after every subject had run).
-void check_reference(const GroupArgs& a, const std::vector<CohortSubject>& subjects) {
+// How a subject's elements correspond to others' (analysis::correspondence_mode), in words.
+std::string describe_mode(const std::string& mode) {
+  const std::string kind = mode.substr(0, mode.find(' '));
+  if (kind == "atlas") return "atlas correspondence through sphere.reg (" + mode + ")";
+  if (kind == "registration") return "registration to the atlas map without sphere.reg (" + mode + ")";
+  return mode + " correspondence (no --atlas)";
+}
+
+// The cohort and the options checked together before any folder or map: the correspondence mode
+// of every subject (a reference refuses to mix modes, which otherwise showed only after every
+// control had been mapped) and, with --normative, the given reference (its K, normalisation,
+// mode, and that it is a complete one). Returns the given reference's controls (0: none given).
+int check_cohort(const GroupArgs& a, const std::vector<CohortSubject>& subjects) {
+  const std::string where = a.cohort + ":";
+  analysis::RunOptions run_options;
+  run_options.atlas_dir = a.atlas;
+  std::vector<std::string> modes;
+  for (const auto& s : subjects) {
+    // With --atlas, one sphere.reg alone would silently map both hemispheres by registration.
+    if (!a.atlas.empty() && s.lh_sphere_reg.empty() != s.rh_sphere_reg.empty())
+      throw InputError(where + std::to_string(s.line) + ": subject '" + s.id + "' has " +
+                       (s.lh_sphere_reg.empty() ? "rh_sphere_reg but no lh_sphere_reg" : "lh_sphere_reg but no rh_sphere_reg") +
+                       "; give both (atlas correspondence) or neither (registration to the atlas map)");
+    analysis::SubjectInputs in;
+    in.lh_sphere_reg = s.lh_sphere_reg;
+    in.rh_sphere_reg = s.rh_sphere_reg;
+    modes.push_back(analysis::correspondence_mode(in, run_options));
+  }
   if (a.normative.empty()) {
     // The reference is built from the controls: too few and every subject would run for nothing.
     const auto controls = std::count_if(subjects.begin(), subjects.end(), [](const CohortSubject& s) { return s.role == "control"; });
     if (controls < analysis::kMinControls)
       throw InputError(a.cohort + ": " + std::to_string(controls) + " control(s); a reference needs at least " +
                        std::to_string(analysis::kMinControls) + ": add controls, or give an existing reference (--normative)");
-    return;
+    // Every subject in the mode of the first control (the reference gets the controls' mode).
+    const std::size_t first = static_cast<std::size_t>(
+        std::find_if(subjects.begin(), subjects.end(), [](const CohortSubject& s) { return s.role == "control"; }) - subjects.begin());
+    for (std::size_t i = 0; i < subjects.size(); ++i)
+      if (modes[i] != modes[first])
+        throw InputError(where + std::to_string(subjects[i].line) + ": subject '" + subjects[i].id + "' would be mapped in " +
+                         describe_mode(modes[i]) + " but control '" + subjects[first].id + "' (line " +
+                         std::to_string(subjects[first].line) + ") in " + describe_mode(modes[first]) +
+                         "; a reference cannot mix modes: give every row both lh_sphere_reg and rh_sphere_reg, or none");
+    return 0;
   }
   const analysis::NormativeReference ref = analysis::read_reference(a.normative);
+  if (ref.partial)
+    throw InputError(a.normative + ": is a partial reference (" + std::to_string(ref.subjects.size()) +
+                     " control(s), from `normative build --partial`) meant for merging; merge it with the others "
+                     "(authalic normative merge) before giving it to --normative");
+  analysis::check_reference_usable(ref, a.normative);
   const std::string normalisation = a.normalize == "none" || a.normalize == "global" ? a.normalize : "reference-region";
   if (ref.normalisation != normalisation)
     throw InputError(a.normative + ": the reference's values are normalised '" + ref.normalisation + "' but the subjects' would be '" +
@@ -171,12 +211,38 @@ void check_reference(const GroupArgs& a, const std::vector<CohortSubject>& subje
     throw InputError(a.normative + ": the reference has " + to_string(ref.grid.domain) + " K = " + std::to_string(ref.grid.k) +
                      " elements but the subjects would get square K = " + std::to_string(a.k) + "; give --k " +
                      std::to_string(ref.grid.k) + " or a reference built with K = " + std::to_string(a.k));
+  for (std::size_t i = 0; i < subjects.size(); ++i)
+    if (subjects[i].role == "patient" && modes[i] != ref.correspondence)
+      throw InputError(where + std::to_string(subjects[i].line) + ": patient '" + subjects[i].id + "' would be mapped in " +
+                       describe_mode(modes[i]) + " but the reference " + a.normative + " was built in " +
+                       describe_mode(ref.correspondence) + "; run in the reference's mode (--atlas and the sphere_reg "
+                       "columns) or give a reference built in this one");
+  return static_cast<int>(ref.subjects.size());
+}
+
+// group --check: the cohort as read, for workflow/Snakefile (which then needs no CSV reader of its
+// own, and refuses exactly what `group` refuses).
+nlohmann::json cohort_json(const std::vector<CohortSubject>& subjects) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& s : subjects) {
+    nlohmann::json j = {{"id", s.id},           {"role", s.role},         {"line", s.line},
+                        {"pet", s.pet},         {"lh_white", s.lh_white}, {"lh_pial", s.lh_pial},
+                        {"rh_white", s.rh_white}, {"rh_pial", s.rh_pial}, {"lh_cortex", s.lh_cortex},
+                        {"rh_cortex", s.rh_cortex}};
+    j["age"] = s.age > 0 ? nlohmann::json(s.age) : nlohmann::json();  // null: unknown
+    for (const auto& [key, value] : {std::pair<const char*, const std::string*>{"t1", &s.t1}, {"sex", &s.sex},
+                                     {"lh_sphere_reg", &s.lh_sphere_reg}, {"rh_sphere_reg", &s.rh_sphere_reg}})
+      if (!value->empty()) j[key] = *value;
+    list.push_back(std::move(j));
+  }
+  return list;
 }
 
 // OUT/participants.tsv (+ .json describing the columns), as a BIDS dataset lists its subjects:
 // one row per cohort subject in cohort order, with where its outputs are and whether it ran.
+// not_run: the status of a subject that was not run (a patient without a reference).
 void write_participants(const std::string& out, const std::vector<CohortSubject>& subjects, const std::vector<Job>& controls,
-                        const std::vector<Job>& patients) {
+                        const std::vector<Job>& patients, const std::string& not_run) {
   std::map<std::string, int> exit_code;
   for (const auto* group : {&controls, &patients})
     for (const auto& j : *group) exit_code[j.id] = j.exit_code;
@@ -185,9 +251,13 @@ void write_participants(const std::string& out, const std::vector<CohortSubject>
     char age[32] = "n/a";
     if (s.age > 0) std::snprintf(age, sizeof(age), "%g", s.age);
     const int code = exit_code.count(s.id) ? exit_code[s.id] : -1;
+    // A subject's folder appears only when its run completed (a failed one has none to point to).
     tsv += "sub-" + s.id + "\t" + s.role + "\t" + age + "\t" + (s.sex.empty() ? "n/a" : s.sex) + "\t" +
-           analysis::SubjectFiles{s.id}.folder() + "\t" +
-           (code == 0 ? "ok" : "failed (exit " + std::to_string(code) + ", see logs/" + s.id + ".log)") + "\n";
+           (code == 0 ? analysis::SubjectFiles{s.id}.folder() : "n/a") + "\t" +
+           (code == 0    ? "ok"
+            : code == -1 ? not_run
+                         : "failed (exit " + std::to_string(code) + ", see logs/" + s.id + ".log)") +
+           "\n";
   }
   io::write_file_atomically((fs::path(out) / "participants.tsv").string(), tsv);
   const nlohmann::json columns = {
@@ -195,14 +265,23 @@ void write_participants(const std::string& out, const std::vector<CohortSubject>
       {"group", {{"Description", "role in the cohort"}, {"Levels", {{"control", "in the normative reference"}, {"patient", "compared with it"}}}}},
       {"age", {{"Description", "age at the scan"}, {"Units", "year"}}},
       {"sex", {{"Description", "sex as given in the cohort CSV"}, {"Levels", {{"F", "female"}, {"M", "male"}, {"O", "other"}}}}},
-      {"folder", {{"Description", "the subject's outputs (authalic run), relative to this file"}}},
-      {"status", {{"Description", "ok, or failed with run's exit code and the log to read"}}}};
+      {"folder", {{"Description", "the subject's outputs (authalic run), relative to this file; n/a when it did not run to the end"}}},
+      {"status", {{"Description", "ok; failed, with run's exit code and the log to read; or not run (a patient when no "
+                                  "reference could be built), with the reason"}}}};
   io::write_file_atomically((fs::path(out) / "participants.json").string(), columns.dump(2) + "\n");
 }
 
 int run_group(const GroupArgs& a) {
   const auto subjects = read_cohort(a.cohort);
-  check_reference(a, subjects);
+  const int reference_controls = check_cohort(a, subjects);
+  if (a.check) {
+    const auto controls = std::count_if(subjects.begin(), subjects.end(), [](const CohortSubject& s) { return s.role == "control"; });
+    if (global_options().json)
+      std::cout << nlohmann::json{{"cohort", a.cohort}, {"subjects", cohort_json(subjects)}}.dump(2) << '\n';
+    info("authalic group --check: " + a.cohort + ": " + std::to_string(controls) + " controls and " +
+         std::to_string(subjects.size() - static_cast<std::size_t>(controls)) + " patients, ready to run");
+    return 0;
+  }
   if (fs::exists(a.out) && !fs::is_empty(a.out) && !a.force)
     throw InputError(a.out + ": output folder exists and is not empty; choose another or pass --force");
   fs::create_directories(fs::path(a.out) / "logs");
@@ -248,7 +327,7 @@ int run_group(const GroupArgs& a) {
   }
   nlohmann::json summary;
   summary["cohort"] = a.cohort;
-  summary["controls_used"] = used;
+  summary["controls_succeeded"] = used;
   int reference_exit = -1;
   if (!a.normative.empty()) {
     reference_exit = 0;  // given: nothing to build
@@ -264,27 +343,43 @@ int run_group(const GroupArgs& a) {
     std::cerr << "authalic group: only " << used << " controls succeeded; at least " << analysis::kMinControls << " are needed for a reference\n";
   }
 
-  // 3. Patients, compared with the reference when there is one.
-  std::vector<std::string> extra;
+  // 3. Patients, compared with the reference. Without one they are not run: a PET-only report
+  // marked "ok" read as a comparison that found nothing.
   const std::string reference = a.normative.empty() ? (fs::path(a.out) / "normative.json").string() : a.normative;
-  if (reference_exit == 0) extra = {"--normative", reference};
-  std::vector<Job> patients = make_jobs("patient", extra);
-  run_jobs(patients, parallel, "patients", progress);
+  std::vector<Job> patients = make_jobs("patient", {"--normative", reference});
+  const std::string not_run = reference_exit < 0 ? "not run: only " + std::to_string(used) + " controls succeeded, a reference needs " +
+                                                       std::to_string(analysis::kMinControls)
+                                                 : "not run: the reference could not be built (see logs/normative.log)";
+  if (reference_exit == 0)
+    run_jobs(patients, parallel, "patients", progress);
+  else if (!patients.empty())
+    std::cerr << "authalic group: " << patients.size() << " patient(s) " << not_run << "\n";
 
-  int failed = 0;
+  int failed = 0, not_compared = 0;
   for (const auto* group : {&controls, &patients})
     for (const auto& j : *group) {
-      summary["subjects"].push_back({{"id", j.id}, {"exit_code", j.exit_code}, {"seconds", j.seconds}, {"log", j.log}});
-      if (j.exit_code != 0) ++failed;
+      const bool ran = j.exit_code != -1;
+      summary["subjects"].push_back({{"id", j.id},
+                                     {"role", group == &controls ? "control" : "patient"},
+                                     {"status", !ran ? "not run" : j.exit_code == 0 ? "ok" : "failed"},
+                                     {"exit_code", ran ? nlohmann::json(j.exit_code) : nlohmann::json()},
+                                     {"seconds", j.seconds},
+                                     {"log", j.log}});
+      failed += ran && j.exit_code != 0;
+      not_compared += !ran;
     }
-  write_participants(a.out, subjects, controls, patients);
+  write_participants(a.out, subjects, controls, patients, not_run);
+  // The controls in the reference the patients were compared with (none when there was none).
+  summary["reference"] = reference_exit == 0 ? nlohmann::json(reference) : nlohmann::json();
+  summary["controls_used"] = !a.normative.empty() ? reference_controls : reference_exit == 0 ? used : 0;
   summary["reference_exit_code"] = reference_exit;
   summary["failed"] = failed;
+  summary["not_run"] = not_compared;
   if (global_options().json) std::cout << summary.dump(2) << '\n';
-  info("authalic group: " + std::to_string(controls.size() + patients.size() - failed) + " subjects done, " +
-       std::to_string(failed) + " failed; reference " +
+  info("authalic group: " + std::to_string(controls.size() + patients.size() - failed - not_compared) + " subjects done, " +
+       std::to_string(failed) + " failed, " + std::to_string(not_compared) + " not run; reference " +
        (!a.normative.empty() ? "given (" + a.normative + ")" : reference_exit == 0 ? "built" : "NOT built"));
-  return (failed == 0 && reference_exit == 0) ? 0 : 3;
+  return (failed == 0 && not_compared == 0 && reference_exit == 0) ? 0 : 3;
 }
 
 const bool registered = register_command({60, [](CLI::App& parent) {
@@ -302,7 +397,7 @@ const bool registered = register_command({60, [](CLI::App& parent) {
   sub->add_option("cohort", args->cohort, "Cohort list (CSV)")->required()->check(CLI::ExistingFile);
   sub->add_option("out", args->out, "Output folder")->required();
   sub->add_option("--jobs,-j", args->jobs, "Subjects processed at once (the --threads, or all cores, are shared among them)")
-      ->check(CLI::PositiveNumber);
+      ->check(in_range(1, 256));
   add_k_option(*sub, args->k, {DomainKind::Square}, 2, 512);
   sub->add_flag("--force", args->force, "Write into an existing output folder");
   sub->add_option("--normalize", args->normalize,
@@ -320,8 +415,12 @@ const bool registered = register_command({60, [](CLI::App& parent) {
                   "reference records the mode and refuses a subject of another)");
   sub->add_option("--normative", args->normative,
                   "Compare the patients with this existing reference (authalic normative build) instead of building one "
-                  "from the controls; its K must match --k (checked before any map)")
+                  "from the controls; its K, normalisation and correspondence mode must match (checked before any map)")
       ->check(CLI::ExistingFile);
+  sub->add_flag("--check", args->check,
+                "Only check COHORT.csv and the options (ids, ages, files, correspondence modes, --normative) as a run would, "
+                "and write nothing (OUT may exist); with --json print the subjects as read, with absolute paths "
+                "(workflow/Snakefile reads its cohort this way)");
   add_common_options(*sub);
   sub->callback([args]() { set_exit_code(run_group(*args)); });
 }});

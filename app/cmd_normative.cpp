@@ -52,9 +52,9 @@ void print_reference_summary(const analysis::NormativeReference& r, const std::s
   info("authalic normative: " + path + ": " + std::to_string(r.subjects.size()) + " subjects, " + to_string(r.grid.domain) +
        " K = " + std::to_string(r.grid.k) + ", " + std::to_string(r.hemispheres.size()) + " hemisphere block(s), normalisation " +
        r.normalisation +
-       (analysis::has_age_model(r) ? ", age model"
-        : r.age_model              ? ", no age model (" + analysis::age_model_absent_reason(r) + ")"
-                                   : ", no age model"));
+       (analysis::has_age_model(r)                    ? ", age model"
+        : !analysis::age_model_absent_reason(r).empty() ? ", no age model (" + analysis::age_model_absent_reason(r) + ")"
+                                                        : ", no age model"));
   if (global_options().json) {
     nlohmann::json j;
     j["output"] = path;
@@ -65,7 +65,7 @@ void print_reference_summary(const analysis::NormativeReference& r, const std::s
     j["normalisation"] = r.normalisation;
     j["units"] = r.units;
     j["age_model"] = analysis::has_age_model(r);
-    if (r.age_model && !analysis::has_age_model(r)) j["age_model_note"] = analysis::age_model_absent_reason(r);
+    if (!analysis::age_model_absent_reason(r).empty()) j["age_model_note"] = analysis::age_model_absent_reason(r);
     j["seconds"] = seconds;
     j["cpu_seconds"] = cpu_seconds;
     std::cout << j.dump(2) << '\n';
@@ -85,7 +85,10 @@ int run_build(const BuildArgs& a) {
       if (!line.empty() && line[0] != '#') tables.push_back(line);
     }
   }
-  if (tables.empty()) throw InputError("normative build: no element table given; list the controls' *_elements.tsv files");
+  if (tables.empty())
+    throw InputError(a.list.empty() ? "normative build: no element table given; list the controls' *_elements.tsv files"
+                                    : a.list + ": lists no element table (it is empty or holds only comments); list the controls' "
+                                               "*_elements.tsv files, one a line");
   std::vector<std::string> inputs = {a.list};
   for (const auto& t : tables) inputs.insert(inputs.end(), {t, analysis::element_sidecar_path(t)});
   io::check_file_roles(inputs, {a.out});
@@ -105,7 +108,7 @@ int run_merge(const MergeArgs& a) {
   io::check_file_roles(a.inputs, {a.out});
   analysis::NormativeReference r = analysis::read_reference(a.inputs[0]);
   for (std::size_t i = 1; i < a.inputs.size(); ++i)
-    r = analysis::merge_references(r, analysis::read_reference(a.inputs[i]), "the references merged so far", a.inputs[i]);
+    r = analysis::merge_references(r, analysis::read_reference(a.inputs[i]), "the reference merged so far", a.inputs[i]);
   r.partial = a.partial;
   if (!a.partial) analysis::check_reference_usable(r, a.out);
   analysis::write_reference(a.out, r);

@@ -408,8 +408,8 @@ void setup(CLI::App& parent) {
                   "--surface: output map (GIFTI .surf.gii). --lh/--rh: output prefix, writes OUT.lh.surf.gii and OUT.rh.surf.gii")
       ->required();
   auto* surface = sub->add_option("--surface", a->surface, "One closed genus-0 whole-brain surface (mm)");
-  sub->add_option("--cut-from", a->cut_from, "Anterior cut vertex (default: the inferior-medial landmark rule)")->check(CLI::NonNegativeNumber)->needs(surface);
-  sub->add_option("--cut-to", a->cut_to, "Posterior cut vertex (default: the inferior-medial landmark rule)")->check(CLI::NonNegativeNumber)->needs(surface);
+  sub->add_option("--cut-from", a->cut_from, "Anterior cut vertex (default: the inferior-medial landmark rule)")->check(in_range(0, 2147483647))->needs(surface);
+  sub->add_option("--cut-to", a->cut_to, "Posterior cut vertex (default: the inferior-medial landmark rule)")->check(in_range(0, 2147483647))->needs(surface);
   auto* lh = sub->add_option("--lh", a->lh, "Left hemisphere surface (mm)");
   auto* rh = sub->add_option("--rh", a->rh, "Right hemisphere surface (mm)");
   auto* lh_faces = sub->add_option("--lh-faces-from", a->lh_faces,

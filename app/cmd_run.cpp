@@ -1,10 +1,10 @@
 // authalic run: the clinician's per-subject pipeline (analysis/pipeline.h). Exit codes: 0 ok,
 // 2 bad input (nothing written), 3 processing failure.
-#include <unistd.h>
 
+#include <chrono>
+#include <cstdio>
 #include <cstdlib>
 
-#include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
@@ -66,18 +66,12 @@ int run(RunArgs& a) {
   }
   analysis::default_annotations(in);
   if (in.pet.empty()) throw InputError("--pet is missing; give the subject's PET (NIfTI, MGH/MGZ or a DICOM folder)");
-  analysis::RunSummary s;
-  try {
-    analysis::RunOptions options = a.options;
-    options.command_line = global_options().command_line;
-    s = analysis::run_subject(in, options, terminal_progress());
-  } catch (...) {
-    // A run that failed while writing (e.g. disk full) leaves no half-written staging folder.
-    std::error_code ec;
-    std::filesystem::remove_all(
-        std::filesystem::path(a.options.out_dir) / (".sub-" + in.id + ".partial-" + std::to_string(::getpid())), ec);
-    throw;
-  }
+  analysis::RunOptions options = a.options;
+  options.command_line = global_options().command_line;
+  // Wall time: the two hemispheres' steps overlap, so the sum of the step times overstates it.
+  const auto start = std::chrono::steady_clock::now();
+  const analysis::RunSummary s = analysis::run_subject(in, options, terminal_progress());
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!global_options().json)
     for (const auto& w : s.warnings) std::cerr << "authalic run: warning: " << w << '\n';
   if (global_options().json) {
@@ -92,14 +86,16 @@ int run(RunArgs& a) {
       j["clusters"] = nlohmann::json::parse(s.clusters_json);
     }
     for (const auto& [step, sec] : s.step_seconds) j["step_seconds"][step] = sec;
+    j["seconds"] = wall;
     std::cout << j.dump(2) << '\n';
   } else {
-    double total = 0;
+    char text[32];
     for (const auto& [step, sec] : s.step_seconds) {
-      info("  " + step + ": " + std::to_string(sec) + " s");
-      total += sec;
+      std::snprintf(text, sizeof text, "%.2f", sec);
+      info("  " + step + ": " + text + " s");
     }
-    info("authalic run: sub-" + in.id + " done in " + std::to_string(total) + " s; report: " + s.subject_dir + "/" +
+    std::snprintf(text, sizeof text, "%.1f", wall);
+    info("authalic run: sub-" + in.id + " done in " + text + " s (wall time); report: " + s.subject_dir + "/" +
          analysis::SubjectFiles{in.id}.report());
   }
   return 0;

@@ -223,6 +223,7 @@ int run_sample(const SampleArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   io::check_file_roles({a.volume, a.surface, a.ribbon, a.surface_to_volume, a.register_t1, a.map, a.cortex},
                        {a.out, a.png.empty() ? png_path_for(a.out) : a.png});
+  io::check_per_vertex_output_name(a.out);  // before minutes of sampling
   check_sample_options(a);
 
   io::VolumeReadOptions vo;
@@ -296,7 +297,10 @@ const bool registered = register_command({40, [](CLI::App& parent) {
       "somewhere is NaN (a value from part of the segment would lean toward one end of it).");
   sub->add_option("VOLUME", a->volume, "PET volume: NIfTI (.nii/.nii.gz), MGH/MGZ, or a DICOM series folder")->required();
   sub->add_option("SURFACE", a->surface, "Cortical surface (FreeSurfer, GIFTI, VTK, ...), mm")->required();
-  sub->add_option("OUT", a->out, "Output per-vertex values (.func.gii)")->required();
+  sub->add_option("OUT", a->out,
+                  "Output per-vertex values: .func.gii (GIFTI), .txt/.csv (one value a line) or a FreeSurfer curv name "
+                  "(lh.pet, x.curv)")
+      ->required();
   sub->add_option("--ribbon", a->ribbon,
                   "Ribbon mode: the other surface of the cortical ribbon (white with pial, same vertices); the value is "
                   "the mean along the segment between corresponding vertices (at least 11 samples)");
@@ -323,7 +327,7 @@ const bool registered = register_command({40, [](CLI::App& parent) {
                   "information) and sample through that transform; without it the PET is assumed co-registered");
   sub->add_option("--map", a->map, "Flat map of SURFACE (e.g. from `authalic flatten`) for the PNG; default: 3D views");
   sub->add_option("--png", a->png, "PNG path (default: OUT with .png)");
-  sub->add_option("--frame", a->frame, "4D PET: the frame to sample (0-based)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--frame", a->frame, "4D PET: the frame to sample (0-based)")->check(in_range(0, 100000));
   sub->add_flag("--sum-frames", a->sum_frames, "4D PET: sum all frames (unweighted: frames of equal duration give a static image "
                                                "in the frames' units times their number)");
   add_common_options(*sub);

@@ -26,7 +26,7 @@ void setup(CLI::App& parent) {
       "Midpoint (1-to-4) subdivision of a surface, N times (vertices x ~4^N). The input's vertices come first, in "
       "their order; new vertices are edge midpoints (mm, same space as the input).");
   sub->add_option("IN", a->in, "Input surface (GIFTI, FreeSurfer, VTK, PLY, OBJ, MNI .obj, STL)")->required();
-  sub->add_option("OUT", a->out, "Output surface (format by extension)")->required();
+  sub->add_option("OUT", a->out, "Output surface, format by extension: .surf.gii, .vtk, .vtp, .ply, .obj, .stl, else FreeSurfer binary (lh.white)")->required();
   sub->add_option("--times", a->times, "Number of subdivisions")->check(in_range(1, 6))->capture_default_str();
   sub->add_option("--faces-from", a->faces_from,
                   "Subdivide this face set's triangles (same vertices as IN, e.g. a cortex patch such as flat_left.gii.gz): OUT has "
@@ -34,6 +34,7 @@ void setup(CLI::App& parent) {
   add_common_options(*sub);
   sub->callback([a]() {
     io::check_file_roles({a->in, a->faces_from}, {a->out});
+    io::check_surface_output_name(a->out);
     const io::Surface s = io::read_surface(a->in);
     if (s.mesh.num_faces() == 0) throw InputError(a->in + ": has no triangles to subdivide");
     TriMesh fine = subdivide_midpoint(s.mesh, a->times);

@@ -111,6 +111,7 @@ std::vector<CohortSubject> read_cohort(const std::string& path) {
       throw InputError(where + ": " + std::to_string(cells.size()) + " fields, but the header has " + std::to_string(header.size()) +
                        " columns; check the row for a missing or extra comma (a field with a comma needs quotes)");
     CohortSubject s;
+    s.line = lineno;
     s.id = get("subject_id");
     if (s.id.empty()) throw InputError(where + ": empty subject_id");
     // The id becomes folder and log names (sub-<id>, logs/<id>.log): letters and digits only

@@ -11,6 +11,7 @@
 namespace authalic::app {
 
 struct CohortSubject {
+  int line = 0;  // in the cohort file, for messages
   std::string id, role;
   double age = 0;
   std::string pet, lh_white, lh_pial, rh_white, rh_pial, lh_cortex, rh_cortex;  // absolute paths

@@ -287,6 +287,78 @@ void keep_freed_memory() {
   ::mallopt(M_TOP_PAD, 64 << 20);
 }
 
+// Edit distance (Levenshtein) between two names, for "did you mean".
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// "; did you mean X?" for the closest of `names` within 2 edits of `typed`, else "".
+std::string did_you_mean(const std::string& typed, const std::vector<std::string>& names) {
+  std::string best;
+  std::size_t best_distance = 3;
+  for (const std::string& n : names)
+    if (const std::size_t d = edit_distance(typed, n); d < best_distance) best = n, best_distance = d;
+  return best.empty() ? "" : "; did you mean " + best + "?";
+}
+
+// A mistyped subcommand or option, named, before CLI11 parses: CLI11 reports the first problem it
+// meets in its own order, so `authalic flaten x y` said "A subcommand is required" and
+// `run --outt x` "--out is required". Walks the subcommands named on the line; tokens after "--",
+// short options, negative numbers and names like "-x.gii" (a file: main's hint) are left to CLI11.
+std::string mistyped_argument(CLI::App& cli, int argc, char** argv) {
+  const auto all = [](CLI::App*) { return true; };
+  CLI::App* current = &cli;
+  std::string path = "authalic";
+  bool value_next = false;  // the previous token was an option that takes a value
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--") break;
+    if (value_next) {
+      value_next = false;
+      continue;
+    }
+    if (arg.rfind("--", 0) == 0) {
+      const std::string name = arg.substr(0, arg.find('='));
+      if (name.find_first_of("./") != std::string::npos) continue;
+      const CLI::Option* option = current->get_option_no_throw(name);
+      if (option == nullptr) {
+        std::vector<std::string> names;
+        for (const CLI::Option* o : current->get_options())
+          for (const std::string& l : o->get_lnames()) names.push_back("--" + l);
+        return path + ": unknown option " + name + did_you_mean(name, names) + " (see " + path + " --help)";
+      }
+      value_next = arg.find('=') == std::string::npos && option->get_type_size() > 0;
+      continue;
+    }
+    if (arg.rfind('-', 0) == 0) continue;
+    const std::vector<CLI::App*> subcommands = current->get_subcommands(all);
+    if (subcommands.empty()) continue;  // a positional argument
+    // A command with subcommands: this word names one of them.
+    CLI::App* next = nullptr;
+    std::vector<std::string> names;
+    for (CLI::App* sub : subcommands) {
+      names.push_back(sub->get_name());
+      if (sub->check_name(arg)) next = sub;
+    }
+    if (next == nullptr)
+      return path + ": unknown subcommand '" + arg + "'" + did_you_mean(arg, names) + " (see " + path + " --help)";
+    current = next;
+    path += " " + arg;
+  }
+  return "";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -344,6 +416,8 @@ int main(int argc, char** argv) {
     if (json) std::cout << nlohmann::json{{"error", what}, {"kind", kind}, {"exit_code", code}}.dump(2) << '\n';
     return code;
   };
+  if (const std::string mistyped = mistyped_argument(cli, argc, argv); !mistyped.empty())
+    return fail("usage", "authalic: error: ", mistyped, 2);
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -74,7 +74,15 @@ void add_max_memory_option(CLI::App& sub, double* limit_gb) {
   sub.add_option("--max-memory", *limit_gb,
                  "Refuse up front (exit 2) when the map's estimated peak memory exceeds this many GB (default: 75% of "
                  "the memory available: the physical RAM, or the cgroup limit when lower, as under SLURM or a container)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Validator(
+          [](std::string& value) -> std::string {
+            // CLI::PositiveNumber printed its upper bound, DBL_MAX, in 300 digits.
+            char* end = nullptr;
+            const double x = std::strtod(value.c_str(), &end);
+            return value.empty() || end != value.c_str() + value.size() || !(x > 0 && x < 1e9) ? "'" + value + "' is not a positive number of GB"
+                                                                                           : std::string();
+          },
+          "GB"));
 }
 
 void check_memory(const std::string& what, long long vertices, double needed_bytes, double limit_gb) {

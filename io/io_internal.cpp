@@ -1,5 +1,7 @@
 #include "io/io_internal.h"
 
+#include <fcntl.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -214,12 +216,42 @@ constexpr int kSignalSlots = 32;
 constexpr std::size_t kSignalPathMax = 4096;
 char g_signal_paths[kSignalSlots][kSignalPathMax];
 volatile std::sig_atomic_t g_signal_used[kSignalSlots];
+volatile std::sig_atomic_t g_signal_kind[kSignalSlots];
 std::mutex g_signal_mutex;
 
+// The entries of a folder unlinked, then the folder removed, with async-signal-safe calls only
+// (open, getdents64, unlinkat, rmdir). Another thread may still be adding a file: a few rounds.
+void remove_folder_of_files(const char* path) {
+  for (int round = 0; round < 5; ++round) {
+    const int fd = ::open(path, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) return;
+    alignas(8) char buf[4096];
+    for (;;) {
+      const long n = ::syscall(SYS_getdents64, fd, buf, sizeof buf);
+      if (n <= 0) break;
+      for (long at = 0; at < n;) {
+        // struct linux_dirent64: d_ino (8), d_off (8), d_reclen (2), d_type (1), d_name.
+        unsigned short reclen = 0;
+        std::memcpy(&reclen, buf + at + 16, sizeof reclen);
+        const char* name = buf + at + 19;
+        if (std::strcmp(name, ".") != 0 && std::strcmp(name, "..") != 0) ::unlinkat(fd, name, 0);
+        at += reclen;
+      }
+    }
+    ::close(fd);
+    if (::rmdir(path) == 0 || errno == ENOENT) return;
+  }
+}
+
 extern "C" void remove_on_signal_handler(int sig) {
-  // Only async-signal-safe calls here: unlink, signal, raise.
-  for (int i = 0; i < kSignalSlots; ++i)
-    if (g_signal_used[i]) ::unlink(g_signal_paths[i]);
+  // Only async-signal-safe calls here: unlink, open, getdents64, unlinkat, rmdir, signal, raise.
+  for (const int kind : {0, 1, 2})
+    for (int i = 0; i < kSignalSlots; ++i) {
+      if (!g_signal_used[i] || g_signal_kind[i] != kind) continue;
+      if (kind == 0) ::unlink(g_signal_paths[i]);
+      if (kind == 1) remove_folder_of_files(g_signal_paths[i]);
+      if (kind == 2) ::rmdir(g_signal_paths[i]);
+    }
   std::signal(sig, SIG_DFL);
   std::raise(sig);
 }
@@ -240,13 +272,14 @@ void install_signal_handlers_once() {
 
 }  // namespace
 
-RemoveOnSignal::RemoveOnSignal(const std::string& path) {
+RemoveOnSignal::RemoveOnSignal(const std::string& path, SignalRemoval kind) {
   if (path.size() >= kSignalPathMax) return;
   install_signal_handlers_once();
   std::lock_guard<std::mutex> lock(g_signal_mutex);
   for (int i = 0; i < kSignalSlots; ++i)
     if (!g_signal_used[i]) {
       std::memcpy(g_signal_paths[i], path.c_str(), path.size() + 1);
+      g_signal_kind[i] = static_cast<int>(kind);
       g_signal_used[i] = 1;  // published after the path is complete
       slot_ = i;
       return;

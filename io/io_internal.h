@@ -157,9 +157,13 @@ bool nifti_header_view(const std::string& bytes, NiftiHeaderView* view);
 // While alive, `path` is unlinked if the process gets SIGTERM, SIGINT or SIGHUP (the signal then
 // ends the process as before): temporary files and half-written outputs do not outlive a killed
 // run. At most 32 at once; beyond that a file is simply not covered.
+// kind: a file (unlinked), a folder of files (its entries unlinked, then the folder removed) or a
+// folder removed only when empty (an output folder the run made); files go first, then folders
+// of files, then empty folders.
+enum class SignalRemoval { File, FolderOfFiles, FolderIfEmpty };
 class RemoveOnSignal {
  public:
-  explicit RemoveOnSignal(const std::string& path);
+  explicit RemoveOnSignal(const std::string& path, SignalRemoval kind = SignalRemoval::File);
   ~RemoveOnSignal();
   RemoveOnSignal(const RemoveOnSignal&) = delete;
   RemoveOnSignal& operator=(const RemoveOnSignal&) = delete;

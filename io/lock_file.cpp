@@ -31,6 +31,7 @@ LockFile::LockFile(const std::string& path, const std::string& what) : path_(pat
     struct stat held {}, named {};
     if (::fstat(fd, &held) == 0 && ::stat(path.c_str(), &named) == 0 && held.st_ino == named.st_ino && held.st_dev == named.st_dev) {
       fd_ = fd;
+      on_signal_ = std::make_unique<RemovedOnSignal>(path_, RemovedOnSignal::Kind::File);
       return;
     }
     ::close(fd);
@@ -40,6 +41,7 @@ LockFile::LockFile(const std::string& path, const std::string& what) : path_(pat
 
 LockFile::~LockFile() {
   if (fd_ < 0) return;
+  on_signal_.reset();  // first: once unlinked, the path may name another process's lock
   ::unlink(path_.c_str());
   ::close(fd_);
 }

@@ -125,6 +125,7 @@ VectorXd parse_text_values(const std::string& text, const std::string& path) {
 }
 
 void check_length(const std::string& path, Eigen::Index n, int expected_vertices) {
+  if (expected_vertices > 0 && n == 0) fail(path, "holds no values (the file is empty)", "give the per-vertex file of this surface");
   if (expected_vertices >= 0 && n != expected_vertices)
     fail(path, "has " + std::to_string(n) + " values but the surface has " + std::to_string(expected_vertices) + " vertices",
          "use the per-vertex file that belongs to this surface");
@@ -201,7 +202,39 @@ Surface read_surface(const std::string& path) {
   return s;
 }
 
+namespace {
+
+// Extensions of other kinds of files: a FreeSurfer binary written under one of these names is
+// misread by every tool (nibabel: "not a gzip file"). "" when the name ends in none.
+std::string foreign_extension(const std::string& path, const std::vector<std::string>& also) {
+  const std::string name = detail::lower_filename(path);
+  std::vector<std::string> foreign = {".nii", ".nii.gz", ".mgh", ".mgz", ".img", ".hdr", ".dcm", ".png", ".jpg", ".jpeg",
+                                      ".tsv", ".json", ".html", ".pdf", ".label", ".annot", ".spec", ".zip", ".tar"};
+  foreign.insert(foreign.end(), also.begin(), also.end());
+  for (const auto& ext : foreign)
+    if (ends_with(name, ext)) return ext;
+  if (ends_with(name, ".gz") && !ends_with(name, ".gii.gz")) return ".gz";
+  return "";
+}
+
+}  // namespace
+
+void check_surface_output_name(const std::string& path) {
+  const std::string ext = foreign_extension(path, {".txt", ".csv"});
+  if (!ext.empty())
+    throw InputError(path + ": a surface cannot be written as " + ext + "; give a name ending in .surf.gii (GIFTI), .vtk, .vtp, "
+                     ".ply, .obj or .stl, or a FreeSurfer surface name such as lh.white (no such extension)");
+}
+
+void check_per_vertex_output_name(const std::string& path) {
+  const std::string ext = foreign_extension(path, {".vtk", ".vtp", ".ply", ".obj", ".stl"});
+  if (!ext.empty())
+    throw InputError(path + ": per-vertex values cannot be written as " + ext + "; give a name ending in .func.gii or "
+                     ".shape.gii (GIFTI), .txt or .csv (one value a line), or a FreeSurfer curv name such as lh.thickness or x.curv");
+}
+
 void write_surface(const std::string& path, const TriMesh& mesh, const SurfaceWriteOptions& options) {
+  check_surface_output_name(path);
   validate_for_writing(mesh, path);
   const std::string format = output_format(path);
   const TriMesh m3 = as_3d(mesh);
@@ -320,6 +353,7 @@ VectorXd read_per_vertex(const std::string& path, int expected_vertices, int col
 }
 
 void write_per_vertex(const std::string& path, const MatrixXd& values, const FuncWriteOptions& options) {
+  check_per_vertex_output_name(path);
   if (!values.allFinite()) {
     // NaN is legal in GIFTI func files (masked vertices) but not in curv; say so for curv only.
     const std::string name = detail::lower_filename(path);

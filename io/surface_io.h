@@ -56,6 +56,11 @@ struct SurfaceWriteOptions {
 // Writes by extension (.surf.gii/.gii, .vtk, .vtp, .ply, .obj, .stl, or FreeSurfer binary for
 // anything else, e.g. lh.white). Atomic: a temporary file in the same folder, then rename.
 void write_surface(const std::string& path, const TriMesh& mesh, const SurfaceWriteOptions& options = {});
+// Throws InputError for an output name whose extension names another kind of file (.nii.gz,
+// .mgz, .png, .txt, ...): the FreeSurfer binary that any other name gets would go into a file
+// that no tool reads as what its name says. write_surface checks it; commands call it before
+// computing anything.
+void check_surface_output_name(const std::string& path);
 
 // Per-vertex files (labels, masks, densities, a map's vertices) pair with a surface by its vertex
 // numbering, which an STL file does not have: its triangles' corners are welded by position and
@@ -105,6 +110,10 @@ struct FuncWriteOptions {
 // GIFTI func/shape (.func.gii/.shape.gii): one float32 data array per column of `values`.
 // FreeSurfer curv format for any other extension (first column only).
 void write_per_vertex(const std::string& path, const MatrixXd& values, const FuncWriteOptions& options = {});
+// The same for per-vertex values (write_per_vertex checks it): .func.gii, .shape.gii, .txt, .csv,
+// or a FreeSurfer curv name (lh.thickness, x.curv, x.sulc); a volume, picture, surface or table
+// extension is refused.
+void check_per_vertex_output_name(const std::string& path);
 
 // Per-vertex integer labels as a GIFTI label file (.label.gii) with a label table.
 void write_label_gifti(const std::string& path, const VectorXi& labels, const std::map<int, std::string>& names,

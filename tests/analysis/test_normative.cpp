@@ -252,6 +252,17 @@ TEST(Normative, AgeModelEqualsDirectLeastSquaresFit) {
   add_subject(mixed, ageless, "ageless.csv");
   EXPECT_FALSE(mixed.age_model);
   EXPECT_TRUE(mixed.comoment.empty());
+  // ... and a comparison says so, naming the control (qa4_cli D7: the model vanished silently).
+  EXPECT_EQ(age_model_absent_reason(mixed),
+            "1 of the reference's 16 controls ('ageless') have no age; the age model needs every control's age");
+  const Comparison dropped = compare_to_reference(mixed, patient, plain_sd);
+  EXPECT_FALSE(dropped.age_adjusted);
+  ASSERT_FALSE(dropped.notes.empty());
+  EXPECT_EQ(dropped.notes.back(), age_model_absent_reason(mixed) + ": no age model, z-scores are NOT age adjusted");
+  // A reference without any ages has nothing to explain.
+  NormativeReference none = mixed;
+  for (auto& s : none.subjects) s.age = std::nan("");
+  EXPECT_EQ(age_model_absent_reason(none), "");
   // Controls all of one age: no slope to fit, so z is the plain one and says so (it claimed to
   // be age adjusted).
   std::vector<ElementTable> same_age = tables;

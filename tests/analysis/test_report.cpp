@@ -2,6 +2,8 @@
 // that decode as PNG, escaped text, and deterministic bytes.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -426,6 +428,49 @@ TEST(ReportViewer, ChromiumDrawsTheInteractiveViewOffline) {
   EXPECT_GT(std::stol(dom.substr(at + 12)), 1000) << "the canvas is blank";
   ParsedPage page = parse_page(html_text);
   EXPECT_EQ(page.images.size(), 6u) << "the static pictures are there too";
+}
+
+// qa4_cli D8: the viewer coloured hypometabolism with Niivue's 'winter' (dark blue at -threshold,
+// green at -5), the reverse of the pictures' coolwarm (light blue at -2, dark blue (59, 76, 192) at
+// -5 and beyond). With z = -6 everywhere the overlay's pixels have the pictures' darkest blue (the
+// lighting scales it): blue over twice green and red, red not near 0; 'winter' gave green.
+TEST(ReportViewer, HypometabolismHasThePicturesColours) {
+  if (authalic::test::run_command("command -v chromium") != 0) {
+    if (authalic::test::running_in_ci()) FAIL() << "CI=true but chromium is not installed";
+    GTEST_SKIP() << "chromium not installed";
+  }
+  an::ReportData d = example_report(true);
+  for (auto& h : d.hemispheres) {
+    h.element_z.assign(h.element_z.size(), -6.0);
+    // A cylinder (the flat example is edge-on in the default view), on the right of the midline.
+    for (Eigen::Index v = 0; v < h.surface_V.rows(); ++v) {
+      const double u = h.flat_uv(v, 0), w = h.flat_uv(v, 1);
+      h.surface_V.row(v) << (h.left ? -50 : 50) + 40 * std::cos(2 * M_PI * u), 40 * std::sin(2 * M_PI * u), 80 * w - 40;
+    }
+  }
+  const std::string html_text = an::report_html(d);
+  if (html_text.find("id=\"nv-canvas\"") == std::string::npos) {
+    if (authalic::test::running_in_ci()) FAIL() << "CI=true but the Niivue bundle is not installed (scripts/install_deps.sh)";
+    GTEST_SKIP() << "Niivue not installed (report_assets/node_modules)";
+  }
+  const std::string dir = authalic::test::temp_dir("report_viewer_colours");
+  an::write_report(dir + "/report.html", d);
+  std::string dom;
+  ASSERT_EQ(authalic::test::run_command("timeout 120 chromium --headless --no-sandbox --disable-gpu --use-gl=angle "
+                                        "--use-angle=swiftshader --enable-unsafe-swiftshader --disable-background-networking "
+                                        "--user-data-dir=" + dir + "/profile --virtual-time-budget=15000 --dump-dom file://" +
+                                            dir + "/report.html 2>/dev/null",
+                                        &dom),
+            0);
+  const std::size_t at = dom.find("data-overlay-colour=\"");
+  ASSERT_NE(at, std::string::npos) << dom.substr(dom.find("nv-status"), 300);
+  int r = 0, g = 0, b = 0;
+  ASSERT_EQ(std::sscanf(dom.c_str() + at + 21, "%d,%d,%d", &r, &g, &b), 3) << dom.substr(at, 60);
+  // (59, 76, 192) times the shading: green and red about 0.4 and 0.3 of blue.
+  EXPECT_GT(b, 2 * g) << r << "," << g << "," << b;
+  EXPECT_GT(b, 2 * r) << r << "," << g << "," << b;
+  EXPECT_GT(5 * r, b) << r << "," << g << "," << b << ": the pictures' dark blue has red in it (59, 76, 192)";
+  EXPECT_NE(html_text.find("blue at or below \u2212threshold, darker for lower z"), std::string::npos);
 }
 
 TEST(Report, RobustRangeIgnoresOutliersAndNan) {

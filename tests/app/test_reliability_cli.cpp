@@ -350,6 +350,28 @@ TEST(ReliabilityCli, SwappedWhiteAndPialOrLeftAndRightAreRefused) {
   EXPECT_NE(out.find("left and right look swapped"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/a"));
   EXPECT_FALSE(fs::exists(dir + "/b"));
+  // One file as both hemispheres (qa4_cli D17: it said the left one lay at larger x than itself).
+  EXPECT_EQ(test::run_command(bin() + " run --id x --lh-white " + q(sample("surf/lh.white")) + " --lh-pial " + q(sample("surf/lh.pial")) +
+                                  " --rh-white " + q(sample("surf/lh.white")) + " --rh-pial " + q(sample("surf/lh.pial")) + cortex +
+                                  " --pet " + pet + " --out " + q(dir + "/c") + " --quiet",
+                              &out),
+            2)
+      << out;
+  EXPECT_NE(out.find(sample("surf/lh.white") + ": the same file was given as --lh-white and --rh-white"), std::string::npos) << out;
+  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_FALSE(fs::exists(dir + "/c"));
+}
+
+// qa4_cli D17: messages that pointed the wrong way say what is wrong.
+TEST(ReliabilityCli, EmptyFilesAndListsAreCalledEmpty) {
+  const std::string dir = test::temp_dir("rel-empty");
+  std::ofstream(dir + "/empty.txt").flush();
+  std::ofstream(dir + "/empty.list") << "# no tables yet\n";
+  expect_refused(bin() + " render " + q(dir + "/o.png") + " " + q(sample("surf/lh.white")) + " --values " + q(dir + "/empty.txt"),
+                 dir + "/empty.txt: holds no values (the file is empty)", {});
+  expect_refused(bin() + " normative build " + q(dir + "/r.json") + " --list " + q(dir + "/empty.list"),
+                 dir + "/empty.list: lists no element table (it is empty or holds only comments)", {});
+  EXPECT_FALSE(fs::exists(dir + "/r.json"));
 }
 
 // ---- clearer errors: degenerate geometry in the cortex region -----------------------------------

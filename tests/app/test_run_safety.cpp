@@ -34,6 +34,8 @@ pid_t start(const std::vector<std::string>& args) {
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
     freopen("/dev/null", "w", stderr);
+    // A shell without job control starts background jobs with SIGINT ignored; the tests send it.
+    signal(SIGINT, SIG_DFL);
     execv(argv[0], argv.data());
     _exit(127);
   }
@@ -119,4 +121,84 @@ TEST(RunSafety, SameMapsAndElementsForOneAndTwoThreads) {
     ++compared;
   }
   EXPECT_GE(compared, 10);
+}
+
+namespace {
+
+// Names in `dir` (hidden ones included).
+std::vector<std::string> entries(const fs::path& dir) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) names.push_back(e.path().filename().string());
+  return names;
+}
+
+}  // namespace
+
+// qa4_cli D11: SIGTERM or SIGINT (a scheduler's time limit, Ctrl-C) left OUT/.sub-<id>.partial-<pid>/
+// and OUT/.sub-<id>.lock until the next run of the subject. Now the signal removes them, and OUT
+// too when the run made it: caught while only the lock exists (mapping) and while the staging
+// folder is being written.
+TEST(RunSafety, SigtermOrSigintLeavesNoStagingFolderLockOrOutputFolder) {
+  const std::string top = authalic::test::temp_dir("run-signal");
+  int case_no = 0;
+  for (const int sig : {SIGTERM, SIGINT}) {
+    for (const std::string moment : {".lock", ".partial-"}) {
+      const fs::path out = fs::path(top) / ("out" + std::to_string(case_no++));
+      const pid_t pid = start(run_args(out.string()));
+      bool seen = false;
+      for (int i = 0; i < 20000 && !seen; ++i) {
+        for (const auto& name : entries(out)) seen = seen || name.find(moment) != std::string::npos;
+        if (!seen) std::this_thread::sleep_for(std::chrono::microseconds(500));
+      }
+      kill(pid, sig);
+      int status = 0;
+      ASSERT_EQ(waitpid(pid, &status, 0), pid);
+      ASSERT_TRUE(seen) << moment << " never appeared in " << out;
+      if (WIFEXITED(status)) continue;  // finished before the signal: nothing to check
+      EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
+      const auto left = entries(out);
+      EXPECT_FALSE(fs::exists(out)) << "signal " << sig << " at " << moment << ": " << left.size() << " entries left, first "
+                                    << (left.empty() ? "" : left[0]);
+    }
+  }
+}
+
+// qa4_cli D10: "done in X s" summed the step times, and the two hemispheres' steps overlap: it
+// said 42.8 s for a 26.9 s run. Now the run's wall time, which cannot exceed the process's.
+TEST(RunSafety, DoneInReportsTheWallTime) {
+  const std::string out = authalic::test::temp_dir("run-wall");
+  auto args = run_args(out);
+  args.pop_back();  // --quiet
+  std::string cmd;
+  for (const auto& a : args) cmd += "'" + a + "' ";
+  std::string log;
+  const auto start_time = std::chrono::steady_clock::now();
+  ASSERT_EQ(authalic::test::run_command(cmd + "--threads 2", &log), 0) << log;
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
+  const std::size_t at = log.find("sub-patient01 done in ");
+  ASSERT_NE(at, std::string::npos) << log;
+  const double said = std::stod(log.substr(at + 22));
+  EXPECT_NE(log.find(" s (wall time); report: ", at), std::string::npos) << log;
+  EXPECT_LE(said, elapsed + 0.05) << log;
+  EXPECT_GT(said, 0.5 * elapsed) << log;
+}
+
+// qa4_cli D16: a malformed BIDS sidecar (found when the report is made) gave the right one-line
+// error but left the empty output folder the run had made; the staging folder is now removed on
+// any failure, so the output folder is empty and removed too.
+TEST(RunSafety, FailureAfterStagingLeavesNoOutputFolder) {
+  const std::string dir = authalic::test::temp_dir("run-bad-sidecar");
+  const std::string s = std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/";
+  fs::copy_file(s + "sub-patient01/sub-patient01_pet.nii.gz", dir + "/sub-x_pet.nii.gz");
+  std::ofstream(dir + "/sub-x_pet.json") << "{\"TracerName\": \"FDG\"";  // the closing brace missing
+  auto args = run_args(dir + "/o");
+  for (std::size_t i = 0; i + 1 < args.size(); ++i)
+    if (args[i] == "--pet") args[i + 1] = dir + "/sub-x_pet.nii.gz";
+  std::string cmd;
+  for (const auto& a : args) cmd += "'" + a + "' ";
+  std::string log;
+  EXPECT_EQ(authalic::test::run_command(cmd, &log), 2) << log;
+  EXPECT_NE(log.find("sub-x_pet.json"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(dir + "/o")) << "left: " << (fs::exists(dir + "/o") && !entries(dir + "/o").empty() ? entries(dir + "/o")[0] : "an empty folder");
 }

@@ -1,6 +1,7 @@
 // `authalic sample` end to end: files in, GIFTI func and PNG out, errors as exit code 2.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -113,6 +114,37 @@ TEST(SampleCli, BadInputsExitWithCode2AndSayWhy) {
                                   fx.dir + "/far.surf.gii --trilinear",
                               &out),
             2);
+}
+
+// qa4_cli D9: an output name with the extension of another kind of file got FreeSurfer binary
+// (nibabel: "not a gzip file") and exit 0; refused before any sampling, nothing written. A
+// FreeSurfer curv name without such an extension is still written as curv.
+TEST(SampleCli, OutputNamedAsAnotherKindOfFileIsRefused) {
+  SampleFixture fx("sample_cli_names");
+  for (const std::string name : {"o.nii.gz", "o.mgz", "o.png", "o.vtk", "o.gz"}) {
+    std::string out;
+    EXPECT_EQ(test::run_command(test::authalic_binary() + " sample " + fx.pet + " " + fx.surface + " " + fx.dir + "/" + name, &out), 2)
+        << name << "\n" << out;
+    const std::string ext = name.substr(1);
+    EXPECT_NE(out.find(fx.dir + "/" + name + ": per-vertex values cannot be written as " + ext + "; give a name ending in .func.gii"),
+              std::string::npos)
+        << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+    EXPECT_FALSE(std::filesystem::exists(fx.dir + "/" + name));
+    EXPECT_FALSE(std::filesystem::exists(fx.dir + "/" + name + ".png"));
+  }
+  std::string out;
+  ASSERT_EQ(test::run_command(test::authalic_binary() + " sample " + fx.pet + " " + fx.surface + " " + fx.dir + "/lh.pet --quiet", &out), 0)
+      << out;
+  EXPECT_EQ(io::read_per_vertex(fx.dir + "/lh.pet").size(), fx.sphere.num_vertices()) << "a FreeSurfer curv name still works";
+  // subdivide, the other command that wrote FreeSurfer binary under any name.
+  for (const std::string name : {"s.nii.gz", "s.txt"}) {
+    EXPECT_EQ(test::run_command(test::authalic_binary() + " subdivide " + fx.surface + " " + fx.dir + "/" + name, &out), 2) << out;
+    EXPECT_NE(out.find(fx.dir + "/" + name + ": a surface cannot be written as " + name.substr(1) + "; give a name ending in .surf.gii"),
+              std::string::npos)
+        << out;
+    EXPECT_FALSE(std::filesystem::exists(fx.dir + "/" + name));
+  }
 }
 
 }  // namespace

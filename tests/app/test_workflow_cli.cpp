@@ -150,5 +150,102 @@ TEST(Workflow, FindsTheExecutableBesideItsSnakefileOrSaysHowToPassIt) {
   EXPECT_NE(log.find("--config authalic=/path/to/authalic"), std::string::npos) << log;
 }
 
+bool have_snakemake() { return test::run_command("command -v snakemake > /dev/null 2>&1") == 0; }
+
+// sample_data/cohort.csv's header and its first `controls` control rows and first patient row, the
+// paths as written there (relative to the CSV's folder).
+std::string sample_cohort(int controls) {
+  std::ifstream in(kSample + "/cohort.csv");
+  std::string header, line, text;
+  std::getline(in, header);
+  text = header + "\n";
+  int c = 0, p = 0;
+  while (std::getline(in, line)) {
+    const bool control = line.find(",control,") != std::string::npos;
+    if (control ? c >= controls : p >= 1) continue;
+    (control ? c : p)++;
+    text += line + "\n";
+  }
+  return text;
+}
+
+// The cohort's folder as the sample's: its subjects', surf/ and label/ folders linked in.
+void link_sample_folders(const std::string& dir) {
+  fs::create_directories(dir);
+  for (const auto& entry : fs::directory_iterator(kSample))
+    if (entry.is_directory()) fs::create_directory_symlink(entry.path(), dir + "/" + entry.path().filename().string());
+}
+
+// qa4_cli D1: the workflow read the cohort with a CSV reader of its own that kept only the last of
+// two rows with one subject_id (a control's scan silently replaced) and checked nothing else. It
+// now reads the list through `authalic group --check`: every list `group` refuses is refused with
+// group's own message before any job runs, and nothing is written.
+TEST(Workflow, CohortIsCheckedAsGroupChecksItBeforeAnyJob) {
+  if (!have_snakemake()) {
+    if (test::running_in_ci()) FAIL() << "CI=true but snakemake (Debian package snakemake) is missing";
+    GTEST_SKIP() << "snakemake not installed; skipping the workflow test";
+  }
+  const std::string dir = test::temp_dir("workflow_check");
+  link_sample_folders(dir);
+  const std::string good = sample_cohort(3);
+  const std::string dup_row = "control01,control,55.0,sub-control05/sub-control05_pet.nii.gz,surf/lh.white,surf/lh.pial,"
+                              "surf/rh.white,surf/rh.pial,label/lh.cortex.label,label/rh.cortex.label\n";
+  std::string missing_column = good;
+  missing_column.replace(missing_column.find(",rh_cortex"), 10, "");
+  const std::pair<std::string, std::string> cases[] = {
+      {good + dup_row, "dup.csv:6: subject 'control01' is listed twice"},
+      {missing_column, "nocol.csv: the header has no column 'rh_cortex'"},
+      {sample_cohort(2), "two.csv: 2 control(s); a reference needs at least 3"},
+      {good + "control09,control,7O,sub-control09/sub-control09_pet.nii.gz,surf/lh.white,surf/lh.pial,surf/rh.white,"
+              "surf/rh.pial,label/lh.cortex.label,label/rh.cortex.label\n",
+       "age.csv:6: age '7O' is not a number of years"}};
+  const char* names[] = {"dup.csv", "nocol.csv", "two.csv", "age.csv"};
+  for (std::size_t i = 0; i < std::size(cases); ++i) {
+    const std::string cohort = dir + "/" + names[i];
+    std::ofstream(cohort) << cases[i].first;
+    std::string log;
+    const int rc = test::run_command("snakemake -s " + std::string(AUTHALIC_SOURCE_DIR) + "/workflow/Snakefile -j2 --directory " + dir +
+                                         " --config cohort=" + cohort + " out=" + dir + "/out" + std::to_string(i) +
+                                         " authalic=" + test::authalic_binary(),
+                                     &log);
+    EXPECT_NE(rc, 0) << names[i] << "\n" << log;
+    EXPECT_NE(log.find("cohort " + cohort + " refused by `authalic group --check`: " + dir + "/" + cases[i].second), std::string::npos)
+        << names[i] << "\n" << log;
+    EXPECT_EQ(log.find("Traceback"), std::string::npos) << log;
+    EXPECT_FALSE(fs::exists(dir + "/out" + std::to_string(i))) << names[i] << ": a job ran";
+  }
+}
+
+// qa4_cli D2, D3: paths with spaces, non-ASCII letters and a quote reach every job whole (the
+// shell redirect was cut at the first space, every control failed with an empty log and the error
+// went into a stray file beside the folder); the logs are OUT/logs/<id>.log as `group` writes them.
+TEST(Workflow, PathsWithSpacesAndQuotesReachEveryJob) {
+  if (!have_snakemake()) {
+    if (test::running_in_ci()) FAIL() << "CI=true but snakemake (Debian package snakemake) is missing";
+    GTEST_SKIP() << "snakemake not installed; skipping the workflow test";
+  }
+  const std::string top = test::temp_dir("workflow_spaces");
+  const std::string dir = top + "/sp ace/\xC3\xBCn'\xC3\xAF c\xC3\xB8" "d\xC3\xA9";  // "sp ace/ün'ï cødé"
+  link_sample_folders(dir);
+  std::ofstream(dir + "/coh\xC3\xB6rt.csv") << sample_cohort(3);
+  const std::string out = dir + "/wf out";
+  std::string log;
+  const int rc = test::run_command("snakemake -s " + std::string(AUTHALIC_SOURCE_DIR) + "/workflow/Snakefile -j2 --directory " +
+                                       test::shell_quote(top) + " --config " + test::shell_quote("cohort=" + dir + "/coh\xC3\xB6rt.csv") +
+                                       " " + test::shell_quote("out=" + out) + " authalic=" + test::authalic_binary(),
+                                   &log);
+  ASSERT_EQ(rc, 0) << log;
+  EXPECT_TRUE(fs::exists(out + "/sub-patient01/sub-patient01_report.html")) << log;
+  EXPECT_TRUE(fs::exists(out + "/normative.json")) << log;
+  for (const char* id : {"control01", "control02", "control03", "patient01"}) {
+    std::ifstream in(out + "/logs/" + id + ".log");
+    ASSERT_TRUE(in.good()) << id << "\n" << log;
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("sub-" + std::string(id) + " done"), std::string::npos) << id << ":\n" << text;
+  }
+  EXPECT_TRUE(fs::exists(out + "/logs/normative.log"));
+  EXPECT_FALSE(fs::exists(top + "/sp")) << "a redirect was cut at the space";
+}
+
 }  // namespace
 }  // namespace authalic
