@@ -673,7 +673,7 @@ ElementOutputPaths write_element_outputs(const std::string& prefix, const Elemen
   so.title = "Equal-area elements (" + units + ")";
   io::write_png(p.png_3d, render_surface_views(V_scanner, F, c, {View::Lateral, View::Medial}, so, &result.vertex_element));
 
-  write_element_labels(p.label, result, g);
+  write_element_labels(p.label, result, g, block.hemisphere);
   return p;
 }
 
@@ -684,7 +684,8 @@ VectorXd element_values_at_vertices(const VectorXi& vertex_element, const double
   return out;
 }
 
-void write_element_labels(const std::string& path, const ElementResult& result, const ElementGrid& g) {
+void write_element_labels(const std::string& path, const ElementResult& result, const ElementGrid& g,
+                          const std::string& hemisphere) {
   const ElementBlock& block = result.block;
   VectorXi keys = (result.vertex_element.array() + 1).matrix();
   std::map<int, std::string> names{{0, "none"}};
@@ -692,8 +693,8 @@ void write_element_labels(const std::string& path, const ElementResult& result, 
     names[e.id + 1] = "element " + std::to_string(e.id) + " (row " + std::to_string(e.row) + ", col " + std::to_string(e.col) + ")";
   io::FuncWriteOptions fo;
   fo.column_names = {"element"};
-  if (block.hemisphere == "left") fo.anatomical_structure = "CortexLeft";
-  if (block.hemisphere == "right") fo.anatomical_structure = "CortexRight";
+  if (hemisphere == "left") fo.anatomical_structure = "CortexLeft";
+  if (hemisphere == "right") fo.anatomical_structure = "CortexRight";
   fo.metadata = {{"description", "authalic equal-area element of each vertex: key = element id + 1 (id = row * cols + col), 0 = none"},
                  {"domain", to_string(g.domain)},
                  {"k", std::to_string(g.k)},

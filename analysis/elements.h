@@ -143,7 +143,8 @@ ElementOutputPaths element_output_paths(const std::string& prefix);
 //   PREFIX_area.nii.gz         the same with element areas (mm^2)
 //   PREFIX.png                 the element image with a colour bar and units
 //   PREFIX_3d.png              lateral and medial views coloured by element value, grid drawn
-//   PREFIX.label.gii           per-vertex element as a GIFTI label: key = element id + 1, 0 = none
+//   PREFIX.label.gii           per-vertex element as a GIFTI label: key = element id + 1, 0 = none,
+//                              structure CortexLeft/CortexRight from the table's hemisphere
 // All atomic. `left` picks the lateral side for the 3D views.
 ElementOutputPaths write_element_outputs(const std::string& prefix, const ElementTable& table, const ElementResult& result,
                                          const MatrixXd& V_scanner, const MatrixXi& F, bool left);
@@ -172,8 +173,11 @@ std::vector<float> element_image(const ElementBlock& block, const ElementGrid& g
 VectorXd element_values_at_vertices(const VectorXi& vertex_element, const double* element_values, int num_elements);
 
 // Per-vertex element of a result as a GIFTI label file: key = element id + 1 (id = row * cols +
-// col), 0 = in no element; the label table names each element's row and column. Atomic.
-void write_element_labels(const std::string& path, const ElementResult& result, const ElementGrid& grid);
+// col), 0 = in no element; the label table names each element's row and column. `hemisphere`
+// ("left", "right"; the table's block) gives the GIFTI structure (CortexLeft, CortexRight; none for
+// "both" or "unknown"), so Workbench shows the file on that hemisphere. Atomic.
+void write_element_labels(const std::string& path, const ElementResult& result, const ElementGrid& grid,
+                          const std::string& hemisphere);
 
 // Element values of one block as a rows x cols image (row 0 at the bottom), e.g. for render.h.
 std::vector<double> block_values(const ElementBlock& block);

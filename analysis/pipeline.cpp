@@ -1028,7 +1028,7 @@ void write_hemisphere_pet(const Hemisphere& h, const ElementTable& table, int K,
                 render_element_grid(block_values(h.elements.block), K, K, c, 12, h.name + " PET elements"));
   out.sidecars.add(png_name, {{"description", "element PET values"}});
   const std::string labels_name = out.names.element_labels(h.tag);
-  write_element_labels((out.stage / labels_name).string(), h.elements, table.grid);
+  write_element_labels((out.stage / labels_name).string(), h.elements, table.grid, h.elements.block.hemisphere);
   out.spec.push_back({wo.anatomical_structure, "LABEL", labels_name});
   out.sidecars.add(labels_name, {{"description", "each vertex's equal-area element: key = element id + 1 (id = row x K + column), 0 = "
                                                  "in no element; pairs with the white and pial surfaces (the input's vertices)"},

@@ -170,9 +170,16 @@ int run_elements(const ElementsArgs& a) {
 
   analysis::ElementTable table;
   table.grid = grid;
-  std::string hemisphere = a.hemisphere.empty() ? analysis::hemisphere_of(surface.metadata, a.surface) : a.hemisphere;
-  if (domain.kind == DomainKind::Rectangle && a.hemisphere.empty())
-    hemisphere = !part.is_part ? "both" : hemisphere == "left" || hemisphere == "right" ? hemisphere : part.right ? "right" : "left";
+  // The hemisphere: as given, else the surface's GIFTI structure, else the map's (flatten and
+  // rectangle copy it; a rectangle part has its own), else the part of the rectangle the map fills,
+  // else (square, sphere, disk) the surface's file name; a whole rectangle of unknown side is "both".
+  std::string hemisphere = a.hemisphere;
+  if (hemisphere.empty()) hemisphere = analysis::hemisphere_of(surface.metadata, "");
+  if (hemisphere == "unknown") hemisphere = analysis::hemisphere_of(map.metadata, "");
+  if (hemisphere == "unknown" && domain.kind == DomainKind::Rectangle) hemisphere = !part.is_part ? "both" : part.right ? "right" : "left";
+  if (hemisphere == "unknown") hemisphere = analysis::hemisphere_of({}, a.surface);
+  // The table's block and every per-vertex output (the label file's GIFTI structure) say the same.
+  result.block.hemisphere = hemisphere;
   table.blocks.push_back({hemisphere, result.block.elements});
   auto from_meta = [&](const std::string& key, const std::string& fallback) {
     const auto it = meta.find(key);

@@ -91,6 +91,61 @@ TEST(ElementsCli, WritesTableImagesAndLabelsWithEqualAreasOnAnIsometricMap) {
   EXPECT_FALSE(std::filesystem::exists(dir + "/bad.tsv"));
 }
 
+// The label file's GIFTI structure (QA 4 item 4: `elements` wrote none, wb_command said "Structure:
+// Invalid", even with --hemisphere left; the hemisphere went into the table only). It follows the
+// table's hemisphere wherever that is known: given, the surface's own structure, the map's, or the
+// part of the two-hemisphere rectangle the map fills; unknown, the file claims no side.
+TEST(ElementsCli, LabelFileCarriesTheHemisphereAsItsGiftiStructure) {
+  const std::string dir = test::temp_dir("elements_cli_structure");
+  const TriMesh map = unit_grid(9);
+  TriMesh surface = map;
+  surface.V *= 40.0;
+  io::write_surface(dir + "/cortex.surf.gii", surface);  // no structure, no side in its name
+  io::SurfaceWriteOptions right;
+  right.anatomical_structure = "CortexRight";
+  io::write_surface(dir + "/cortex_r.surf.gii", surface, right);
+  io::write_surface(dir + "/map.surf.gii", map);
+  io::SurfaceWriteOptions left;
+  left.anatomical_structure = "CortexLeft";
+  io::write_surface(dir + "/map_l.surf.gii", map, left);
+  TriMesh right_part = map;  // x in [1, 2]: the right hemisphere's part of the 2:1 rectangle
+  right_part.V.col(0).array() += 1.0;
+  io::write_surface(dir + "/right_part.surf.gii", right_part);
+  io::write_per_vertex(dir + "/v.func.gii", surface.V.col(0));
+  struct Case {
+    std::string name, surface, map, options, hemisphere, structure;
+  };
+  const std::vector<Case> cases = {
+      {"given", "cortex", "map", "--hemisphere left", "left", "CortexLeft"},
+      {"surface", "cortex_r", "map", "", "right", "CortexRight"},
+      {"map", "cortex", "map_l", "", "left", "CortexLeft"},
+      {"left_part", "cortex", "map", "--domain rectangle", "left", "CortexLeft"},
+      {"right_part", "cortex", "right_part", "--domain rectangle", "right", "CortexRight"},
+      {"unknown", "cortex", "map", "", "unknown", ""}};
+  const bool workbench = test::run_command("command -v wb_command > /dev/null 2>&1") == 0;
+  if (!workbench && test::running_in_ci()) FAIL() << "CI=true but wb_command (connectome-workbench) is missing";
+  for (const Case& c : cases) {
+    std::string out;
+    ASSERT_EQ(test::run_command(test::authalic_binary() + " elements " + dir + "/" + c.surface + ".surf.gii " + dir + "/" + c.map +
+                                    ".surf.gii " + dir + "/v.func.gii " + dir + "/" + c.name + " --k 4 -q " + c.options,
+                                &out),
+              0)
+        << c.name << ": " << out;
+    EXPECT_EQ(analysis::read_element_table(dir + "/" + c.name + ".tsv").blocks.at(0).hemisphere, c.hemisphere) << c.name;
+    const std::string label = dir + "/" + c.name + ".label.gii";
+    if (!workbench) continue;
+    std::string info;
+    ASSERT_EQ(test::run_command("wb_command -file-information " + label, &info), 0) << info;
+    const std::size_t at = info.find("Structure:");
+    ASSERT_NE(at, std::string::npos) << info;
+    const std::string line = info.substr(at, info.find('\n', at) - at);
+    if (c.structure.empty())
+      EXPECT_NE(line.find("Invalid"), std::string::npos) << c.name << ": " << line;  // no side claimed
+    else
+      EXPECT_NE(line.find(c.structure), std::string::npos) << c.name << ": " << line;
+  }
+}
+
 // Issue 5 on ../shared/data: `authalic flatten` of B1 (fsaverage5 white_left, cortex = the faces of
 // flat_left), then `authalic elements` on its authalic square map gives element areas with
 // CV <= 0.02, and on its conformal initial map (--initial) a CV far above it.
