@@ -39,7 +39,10 @@ struct ElementGrid {
   int num_elements() const { return rows * cols; }
 };
 // The map-file metadata key that carries Domain::seam_x ("none" for one surface), and its text.
+// kSeamKey is in rectangle units (x in [0, 2]: the map files); a file scaled to mm (`rectangle
+// --flat`, run's space-authalicrect_flat) records the seam in its own units under kSeamMmKey.
 inline constexpr const char* kSeamKey = "authalic_seam_x";
+inline constexpr const char* kSeamMmKey = "authalic_seam_x_mm";
 std::string seam_text(double seam_x);
 // seam_x from that metadata text (what: the file, for the error): "none" -> NaN; a number in (0, 2).
 double parse_seam(const std::string& text, const std::string& what);

@@ -987,7 +987,7 @@ void write_rectangle_part(const Hemisphere& h, const HemisphereRectangles& rect,
   rflat.F = part.F;
   io::SurfaceWriteOptions ro = wo;
   ro.metadata["space"] = "authalic whole-brain 2:1 rectangle scaled to the cortical area of both hemispheres (mm)";
-  ro.metadata[kSeamKey] = seam_text(rect.split);  // in [0, 2] units, as `rectangle` records it
+  ro.metadata[kSeamMmKey] = seam_text(rect.split * std::sqrt(total / 2.0));  // in the file's units (mm), as `rectangle --flat` records it
   const std::string rect_name = out.names.rectangle_flat(h.tag);
   io::write_surface((out.stage / rect_name).string(), rflat, ro);
   if (rflat.num_vertices() == h.white.mesh.num_vertices()) out.spec.push_back({wo.anatomical_structure, "SURFACE", rect_name});

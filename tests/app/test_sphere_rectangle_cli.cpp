@@ -400,6 +400,34 @@ TEST(RectangleCli, TwoHemispheresTakeTheirCortexAsLabels) {
   const auto j = read_json(dir + "/m.json");
   EXPECT_EQ(j.at("metrics").at("flips"), 0);
   EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.01);
+  // Each file records where the parts meet in its own units (QA 4 item 6: the mm files said x = 1
+  // in rectangle units, the seam being at 187.78 mm): the maps w_L as authalic_seam_x, the --flat
+  // files w_L x (mm per unit) as authalic_seam_x_mm, which is where their parts end in mm. The
+  // right hemisphere enlarged 1.1 times, so that the seam is not at x = 1.
+  authalic::TriMesh big = authalic::io::read_surface(s + "surf/rh.white").mesh;
+  big.V *= 1.1;
+  const std::string rh_big = dir + "/rh.big.surf.gii";
+  authalic::io::write_surface(rh_big, big);
+  ASSERT_EQ(run_command(authalic_binary() + " rectangle " + dir + "/uneven --lh " + s + "surf/lh.white --rh " + rh_big + " --lh-cortex " +
+                            s + "label/lh.cortex.label --rh-cortex " + s + "label/rh.cortex.label --metrics " + dir +
+                            "/uneven.json --flat -q",
+                        &output),
+            0)
+      << output;
+  const double split = read_json(dir + "/uneven.json").at("split_x").get<double>();
+  EXPECT_NEAR(split, 2.0 / (1.0 + 1.21), 0.02) << "w_L = 2 A_L / (A_L + A_R)";
+  for (const char* part : {"lh", "rh"}) {
+    const auto map = authalic::io::read_surface(dir + "/uneven." + part + ".surf.gii");
+    const auto mm = authalic::io::read_surface(dir + "/uneven." + part + ".flat.surf.gii");
+    EXPECT_NEAR(std::stod(map.metadata.at("authalic_seam_x")), split, 1e-12) << part;
+    EXPECT_EQ(map.metadata.count("authalic_seam_x_mm"), 0u) << part;
+    EXPECT_EQ(mm.metadata.count("authalic_seam_x"), 0u) << part << ": no rectangle-unit seam in a file in mm";
+    const double scale = mm.mesh.V.col(1).maxCoeff() - mm.mesh.V.col(1).minCoeff();  // the part spans y in [0, 1] x scale
+    EXPECT_GT(scale, 100.0) << part << ": in mm";
+    const double seam_mm = std::stod(mm.metadata.at("authalic_seam_x_mm"));
+    EXPECT_NEAR(seam_mm, split * scale, 1e-6 * scale) << part;
+    EXPECT_NEAR(std::string(part) == "lh" ? mm.mesh.V.col(0).maxCoeff() : mm.mesh.V.col(0).minCoeff(), seam_mm, 1e-4 * scale) << part;
+  }
   // The same region as a face set under a name that says nothing of it: the same map.
   const auto white = authalic::io::read_surface(s + "surf/lh.white");
   const auto left = authalic::io::read_surface(dir + "/brain.lh.surf.gii");
