@@ -361,16 +361,47 @@ ElementResult compute_elements(const ElementMap& map, const ElementGrid& grid, c
   return r;
 }
 
-double element_area_cv(const ElementBlock& block, int col_begin, int col_end) {
-  double sum = 0, sum2 = 0;
-  int n = 0;
+ElementAreaStats element_area_stats(const ElementBlock& block, int col_begin, int col_end) {
+  ElementAreaStats st;
+  double sum = 0, sum2 = 0, lo = INFINITY, hi = -INFINITY;
   for (const auto& e : block.elements)
-    if (e.col >= col_begin && e.col < col_end) sum += e.area_mm2, ++n;
-  if (n == 0) return std::nan("");
-  const double mean = sum / n;
+    if (e.col >= col_begin && e.col < col_end) {
+      sum += e.area_mm2, ++st.count;
+      lo = std::min(lo, e.area_mm2), hi = std::max(hi, e.area_mm2);
+    }
+  if (st.count == 0) return st;
+  const double mean = sum / st.count;
   for (const auto& e : block.elements)
     if (e.col >= col_begin && e.col < col_end) sum2 += (e.area_mm2 - mean) * (e.area_mm2 - mean);
-  return mean > 0 ? std::sqrt(sum2 / n) / mean : 0.0;
+  st.mean_mm2 = mean;
+  st.cv = mean > 0 ? std::sqrt(sum2 / st.count) / mean : 0.0;
+  if (mean > 0) st.min_over_mean = lo / mean, st.max_over_mean = hi / mean;
+  return st;
+}
+
+double element_area_cv(const ElementBlock& block, int col_begin, int col_end) {
+  return element_area_stats(block, col_begin, col_end).cv;
+}
+
+RectanglePartCells rectangle_part_cells(const MatrixXd& D, const MatrixXi& F, const ElementGrid& grid) {
+  RectanglePartCells p;
+  if (grid.domain.kind != DomainKind::Rectangle || F.rows() == 0) return p;
+  double lo = INFINITY, hi = -INFINITY;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) lo = std::min(lo, D(F(f, c), 0)), hi = std::max(hi, D(F(f, c), 0));
+  if (hi - lo > 1.9) return p;
+  const double seam = std::isfinite(grid.domain.seam_x) ? grid.domain.seam_x : 1.0, K = grid.k;
+  p.is_part = true;
+  p.right = 0.5 * (lo + hi) > seam;
+  p.col_begin = p.right ? static_cast<int>(std::ceil(seam * K - 1e-9)) : 0;
+  p.col_end = p.right ? grid.cols : static_cast<int>(std::floor(seam * K + 1e-9));
+  return p;
+}
+
+std::string rectangle_part_note(const RectanglePartCells& part) {
+  return std::string("the map is the ") + (part.right ? "right" : "left") +
+         " hemisphere's part of a two-hemisphere rectangle: only the cells on its side of the seam hold cortex (area CV over the " +
+         std::to_string(part.col_end - part.col_begin) + " columns wholly on its side)";
 }
 
 std::vector<double> block_values(const ElementBlock& block) {

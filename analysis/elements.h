@@ -163,9 +163,33 @@ void write_element_nifti(const std::string& path, const std::vector<float>& data
 // Mean element area (mm^2) of a block, or over a table's blocks: the cortical area per element
 // (over the elements that hold cortex).
 double mean_element_area(const ElementBlock& block);
-// Coefficient of variation (population SD / mean) of the areas of a block's elements in columns
-// [col_begin, col_end) (all by default); NaN when none is there, 0 when their mean is 0.
+// Area statistics of a block's elements in columns [col_begin, col_end) (all by default): their
+// count, mean area (mm^2), coefficient of variation (population SD / mean; 0 when the mean is 0)
+// and smallest and largest area over the mean; NaN when no element is there.
+struct ElementAreaStats {
+  int count = 0;
+  double mean_mm2 = std::numeric_limits<double>::quiet_NaN();
+  double cv = std::numeric_limits<double>::quiet_NaN();
+  double min_over_mean = std::numeric_limits<double>::quiet_NaN(), max_over_mean = std::numeric_limits<double>::quiet_NaN();
+};
+ElementAreaStats element_area_stats(const ElementBlock& block, int col_begin = 0, int col_end = std::numeric_limits<int>::max());
+// Its coefficient of variation.
 double element_area_cv(const ElementBlock& block, int col_begin = 0, int col_end = std::numeric_limits<int>::max());
+
+// One hemisphere's part of a two-hemisphere rectangle (`rectangle --lh/--rh` writes one file per
+// part): it fills the cells on its side of the seam (grid.domain.seam_x; x = 1 when unknown) and
+// leaves the others empty, so its element statistics are those of the cells wholly on its side
+// (over all cells its area CV would be near 1). D: the map's vertices in rectangle units (x in
+// column 0), F: its triangles; a map whose triangles span more than 1.9 in x fills the whole
+// rectangle. `elements` and `metrics` both measure a part this way.
+struct RectanglePartCells {
+  bool is_part = false;
+  bool right = false;
+  int col_begin = 0, col_end = 0;  // the cells wholly inside the part: columns [begin, end)
+};
+RectanglePartCells rectangle_part_cells(const MatrixXd& D, const MatrixXi& F, const ElementGrid& grid);
+// The note both commands print for a part: which hemisphere's part, over which columns.
+std::string rectangle_part_note(const RectanglePartCells& part);
 double mean_element_area(const ElementTable& table);
 // One block's element values (value, or area_mm2 with areas = true) as the data of a cols x rows
 // element image (voxel (col, row) = element row * cols + col), for write_element_nifti.

@@ -91,27 +91,6 @@ MatrixXi faces_in_map_region(const MatrixXi& F, const MatrixXi& map_F, int num_v
   return out;
 }
 
-// One hemisphere's part of a two-hemisphere rectangle (`rectangle --lh/--rh` writes one file per
-// part; issue 19): it fills the cells on its side of the seam, and the others stay empty. Its
-// area CV is that of the cells wholly on its side (over all cells it would be near 1).
-struct RectanglePartCells {
-  bool is_part = false;
-  bool right = false;
-  int col_begin = 0, col_end = 0;  // the cells wholly inside the part: columns [begin, end)
-};
-RectanglePartCells rectangle_part_cells(const analysis::ElementMap& em, const analysis::ElementGrid& grid) {
-  RectanglePartCells p;
-  if (grid.domain.kind != DomainKind::Rectangle || em.D.rows() == 0) return p;
-  const double lo = em.D.col(0).minCoeff(), hi = em.D.col(0).maxCoeff();
-  if (hi - lo > 1.9) return p;
-  const double seam = std::isfinite(grid.domain.seam_x) ? grid.domain.seam_x : 1.0, K = grid.k;
-  p.is_part = true;
-  p.right = 0.5 * (lo + hi) > seam;
-  p.col_begin = p.right ? static_cast<int>(std::ceil(seam * K - 1e-9)) : 0;
-  p.col_end = p.right ? grid.cols : static_cast<int>(std::floor(seam * K + 1e-9));
-  return p;
-}
-
 int run_elements(const ElementsArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   io::check_file_roles({a.surface, a.map, a.values}, analysis::element_output_paths(a.prefix).all());
@@ -158,12 +137,10 @@ int run_elements(const ElementsArgs& a) {
                        kInsertedVerticesKey + " record");
   }
   analysis::ElementResult result = analysis::compute_elements(em, grid, surface.to_scanner);
-  const RectanglePartCells part = rectangle_part_cells(em, grid);
+  const analysis::RectanglePartCells part = analysis::rectangle_part_cells(em.D, em.F, grid);
   if (part.is_part) {
     result.area_cv = analysis::element_area_cv(result.block, part.col_begin, part.col_end);
-    em.notes.push_back(std::string("the map is the ") + (part.right ? "right" : "left") +
-                       " hemisphere's part of a two-hemisphere rectangle: only the cells on its side of the seam hold cortex (area CV over the " +
-                       std::to_string(part.col_end - part.col_begin) + " columns wholly on its side)");
+    em.notes.push_back(analysis::rectangle_part_note(part));
   }
   const double compute_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - compute_start).count();
   const double compute_cpu_seconds = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;  // all threads
