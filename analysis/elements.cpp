@@ -630,8 +630,8 @@ void write_element_nifti(const std::string& path, const std::vector<float>& data
   image.vox2ras = Eigen::Vector4d(side, side, 1.0, 1.0).asDiagonal();
   io::NiftiWriteOptions o;
   char area[48];
-  std::snprintf(area, sizeof(area), "; map grid, element %.4g mm^2", element_area_mm2);
-  o.description = description + area;
+  std::snprintf(area, sizeof(area), "; %s, element %.4g mm^2", io::kMapGridMarker, element_area_mm2);
+  o.description = description.substr(0, 79 - std::string(area).size()) + area;  // the header keeps 79 characters: the area stays
   o.map_grid = true;
   if (kind == ElementImageKind::kZScore) {
     o.intent_code = 5;  // NIFTI_INTENT_ZSCORE (nifti1.h; not included here beside gifti_io.h's copy)

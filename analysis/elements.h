@@ -142,7 +142,7 @@ ElementOutputPaths element_output_paths(const std::string& prefix);
 // Writes, for a one-block table and its result on a surface (V_scanner: RAS mm, F: its faces):
 //   PREFIX.tsv + PREFIX.json   the element table (write_element_table)
 //   PREFIX.nii.gz              cols x rows x 1 float image of element values (voxel (col, row));
-//                              the grid is the domain's, not a scanner space (write_element_nifti)
+//                              the grid is the domain's own space, not a scanner's (write_element_nifti)
 //   PREFIX_area.nii.gz         the same with element areas (mm^2)
 //   PREFIX.png                 the element image with a colour bar and units
 //   PREFIX_3d.png              lateral and medial views coloured by element value, grid drawn
@@ -154,9 +154,11 @@ ElementOutputPaths write_element_outputs(const std::string& prefix, const Elemen
 
 // An element image (cols x rows x blocks float, voxel (col, row, block) holds element
 // row * cols + col of that block) as NIfTI. The grid lives on the map, not in a scanner: sform and
-// qform codes 0 (unknown), so no viewer lays it over anatomy; x and y voxel sizes are
-// sqrt(element area) mm (mm of cortex per element side), z 1. kZScore images carry
-// NIFTI_INTENT_ZSCORE. The description (header descrip) ends with the element area. Atomic.
+// qform code 5 (NIFTI_XFORM_TEMPLATE_OTHER, the element grid's own space, io::NiftiWriteOptions::
+// map_grid) with the affine diag(s, s, 1), s = sqrt(element area) mm (mm of cortex per element
+// side): voxel (i, j, k) at (i s, j s, k) mm in every tool, and read_volume refuses it as a PET.
+// kZScore images carry NIFTI_INTENT_ZSCORE. The description (header descrip) ends with "map grid,
+// element <area> mm^2". Atomic.
 enum class ElementImageKind { kValues, kAreas, kZScore };
 void write_element_nifti(const std::string& path, const std::vector<float>& data, const ElementGrid& grid, int blocks,
                          double element_area_mm2, ElementImageKind kind, const std::string& description);

@@ -392,8 +392,9 @@ json clusters_tsv_sidecar(double threshold) {
 // The element images' space, for their sidecars (write_element_nifti's header convention).
 std::string element_space_note(double element_area_mm2) {
   std::ostringstream s;
-  s << "the authalic map's element grid, not a scanner space (NIfTI sform/qform codes 0); voxel (i, j) = element column i, "
-       "row j from the bottom; voxel size sqrt(element area) mm, element area "
+  s << "the authalic map's element grid, its own space, not a scanner's (NIfTI sform/qform code 5, NIFTI_XFORM_TEMPLATE_OTHER, "
+       "affine diag(s, s, 1) with s = sqrt(element area) mm: voxel (i, j) at (i s, j s, 0) mm); voxel (i, j) = element column i, "
+       "row j from the bottom; element area "
     << element_area_mm2 << " mm^2 of cortex";
   return s.str();
 }

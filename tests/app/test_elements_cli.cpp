@@ -63,14 +63,21 @@ TEST(ElementsCli, WritesTableImagesAndLabelsWithEqualAreasOnAnIsometricMap) {
     EXPECT_NEAR(e.value, (e.col + 0.5) / 8.0, 1e-6);        // linear value: its cell-centre value
     EXPECT_NEAR(e.centroid.x(), 40.0 * (e.col + 0.5) / 8, 1e-9);
   }
-  // The element image is a grid on the map: no scanner orientation (refused as a PET would be),
-  // read as a map grid with voxel size sqrt(element area) = 5 mm.
-  EXPECT_THROW(io::read_volume(dir + "/el.nii.gz"), authalic::InputError);
+  // The element image is a grid on the map, not in a scanner (refused as a PET would be), read as
+  // a map grid with voxel size sqrt(element area) = 5 mm.
+  try {
+    io::read_volume(dir + "/el.nii.gz");
+    ADD_FAILURE() << "an element image was read as a scanner image";
+  } catch (const authalic::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("el.nii.gz: is an authalic element image (a grid on the cortical map, not a scanner space)"),
+              std::string::npos)
+        << e.what();
+  }
   io::VolumeReadOptions grid;
   grid.allow_map_grid = true;
   const io::Volume img = io::read_volume(dir + "/el.nii.gz", grid);
   EXPECT_EQ(img.dims[0], 8);
-  EXPECT_EQ(img.orientation_source, "pixdim");
+  EXPECT_EQ(img.orientation_source, "map grid");
   EXPECT_NEAR(img.voxel_size().x(), 5.0, 1e-5);
   EXPECT_NEAR(img.at(3, 5, 0), 3.5 / 8.0, 1e-6);
   const io::Volume area = io::read_volume(dir + "/el_area.nii.gz", grid);
@@ -89,6 +96,64 @@ TEST(ElementsCli, WritesTableImagesAndLabelsWithEqualAreasOnAnIsometricMap) {
             2);
   EXPECT_NE(out.find("wide.surf.gii: the map spans"), std::string::npos) << out;
   EXPECT_FALSE(std::filesystem::exists(dir + "/bad.tsv"));
+}
+
+// The element image's affine (QA 4 item 7: sform and qform codes were 0, so Workbench put voxel
+// (31, 0, 0) at x = +238 mm and nibabel, with its own fallback, at -119 mm): code 5 (the element
+// grid's own space, NIFTI_XFORM_TEMPLATE_OTHER) with diag(s, s, 1), s = sqrt(element area), so both
+// tools put voxel (i, j, 0) at (i s, j s, 0) mm.
+TEST(ElementsCli, ElementImageIsPlacedAlikeByNibabelAndWorkbench) {
+  const bool nibabel = test::run_command("/usr/bin/python3 -c 'import nibabel'") == 0;
+  const bool workbench = test::run_command("command -v wb_command > /dev/null 2>&1") == 0;
+  if (!nibabel || !workbench) {
+    if (test::running_in_ci()) FAIL() << "CI=true but /usr/bin/python3 with nibabel or wb_command (connectome-workbench) is missing";
+    GTEST_SKIP() << "nibabel or wb_command not available";
+  }
+  const std::string dir = test::temp_dir("elements_cli_affine");
+  const TriMesh map = unit_grid(17);
+  TriMesh surface = map;
+  surface.V *= 40.0;  // 1600 mm^2 over 8 x 8 elements: 25 mm^2, s = 5 mm
+  io::write_surface(dir + "/cortex.surf.gii", surface);
+  io::write_surface(dir + "/map.surf.gii", map);
+  io::write_per_vertex(dir + "/v.func.gii", surface.V.col(0));
+  std::string out;
+  ASSERT_EQ(test::run_command(test::authalic_binary() + " elements " + dir + "/cortex.surf.gii " + dir + "/map.surf.gii " + dir +
+                                  "/v.func.gii " + dir + "/el --k 8 -q",
+                              &out),
+            0)
+      << out;
+  for (const std::string image : {"el.nii.gz", "el_area.nii.gz"}) {
+    const std::string path = dir + "/" + image;
+    std::string nib;
+    ASSERT_EQ(test::run_command("/usr/bin/python3 -c \"import nibabel as nib, numpy as np; i = nib.load('" + path +
+                                    "'); h = i.header; print(int(h['sform_code']), int(h['qform_code']), "
+                                    "*[round(float(x), 4) for c in ((7, 0, 0), (7, 7, 0), (0, 7, 0)) for x in i.affine.dot(list(c) + [1])[:3]])\"",
+                                &nib),
+              0)
+        << nib;
+    EXPECT_EQ(nib, "5 5 35.0 0.0 0.0 35.0 35.0 0.0 0.0 35.0 0.0\n") << image;
+    std::string wb;
+    ASSERT_EQ(test::run_command("wb_command -file-information " + path, &wb), 0) << wb;
+    EXPECT_EQ(wb.find("WARNING"), std::string::npos) << wb;  // "no sform or qform code found, using ANALYZE coordinates"
+    // "IJK = (7,0,0):     XYZ = (35, 0, 0)": Workbench's position of a corner voxel.
+    auto xyz = [&](const std::string& ijk) {
+      const std::size_t at = wb.find("IJK = (" + ijk + "):");
+      const std::size_t open = wb.find("XYZ = (", at);
+      if (at == std::string::npos || open == std::string::npos) return std::string("not listed");
+      return wb.substr(open + 7, wb.find(')', open) - open - 7);
+    };
+    EXPECT_EQ(xyz("7,0,0"), "35, 0, 0") << image << "\n" << wb;
+    EXPECT_EQ(xyz("7,7,0"), "35, 35, 0") << image << "\n" << wb;
+    EXPECT_EQ(xyz("0,7,0"), "0, 35, 0") << image << "\n" << wb;
+  }
+  // The header description says what the grid is.
+  std::string descrip;
+  ASSERT_EQ(test::run_command("/usr/bin/python3 -c \"import nibabel as nib; print(nib.load('" + dir +
+                                  "/el.nii.gz').header['descrip'].tobytes().decode())\"",
+                              &descrip),
+            0)
+      << descrip;
+  EXPECT_NE(descrip.find("map grid, element 25 mm^2"), std::string::npos) << descrip;
 }
 
 // The label file's GIFTI structure (QA 4 item 4: `elements` wrote none, wb_command said "Structure:
