@@ -15,6 +15,7 @@
 #include "app/command.h"
 #include "app/map_json.h"
 #include "core/error.h"
+#include "core/square_map.h"
 #include "core/version.h"
 #include "io/surface_formats.h"
 #include "io/surface_io.h"
@@ -109,18 +110,21 @@ int run_elements(const ElementsArgs& a) {
 
   const auto compute_start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
-  // Vertices the flattening appended (corner and ear splits): placed on the surface, with their
-  // values, from the map's record of them (flatten writes it; the disk map always has some), else
-  // traced from the map's triangles.
+  // Vertices the map appended to the surface's: the flattening's corner and ear splits, or the
+  // copies of the vertices along the cut of `rectangle --surface`. Placed on the surface, with their
+  // values, from the map's record of them (flatten and rectangle write it; the disk map always has
+  // some), else (splits only) traced from the map's triangles.
   const int nv = surface.mesh.num_vertices(), inserted = map.mesh.num_vertices() - nv;
   const auto record = map.metadata.find(kInsertedVerticesKey);
   const bool placed = inserted > 0 && record != map.metadata.end();
   MatrixXd V3 = surface.mesh.V;
   VectorXd vertex_values = values;
+  InsertedVertexRecord appended;
   if (placed) {  // positions and values by the same linear rule, the record read once
     MatrixXd columns(nv, 4);
     columns << surface.mesh.V.leftCols(3), values;
-    const MatrixXd all = place_inserted_vertices(columns, record->second, inserted, a.map);
+    appended = parse_inserted_vertices(record->second, nv, inserted, a.map);
+    const MatrixXd all = extend_to_inserted(columns, appended.parents, appended.weight);
     V3 = all.leftCols(3);
     vertex_values = all.col(3);
   }
@@ -133,8 +137,7 @@ int run_elements(const ElementsArgs& a) {
   if (placed) {  // the per-vertex outputs pair with the surface: its vertices only
     em.num_surface_vertices = nv;
     em.inserted_vertices = inserted;
-    em.notes.push_back(std::to_string(inserted) + " vertices appended by the flattening were placed from the map's " +
-                       kInsertedVerticesKey + " record");
+    em.notes.push_back(inserted_vertices_description(appended) + ": placed from the map's " + kInsertedVerticesKey + " record");
   }
   analysis::ElementResult result = analysis::compute_elements(em, grid, surface.to_scanner);
   const analysis::RectanglePartCells part = analysis::rectangle_part_cells(em.D, em.F, grid);

@@ -76,7 +76,28 @@ std::string inserted_vertices_text(const MatrixXi& parents, const VectorXd& weig
   return text;
 }
 
+int InsertedVertexRecord::copies() const {
+  int n = 0;
+  for (Eigen::Index k = 0; k < parents.rows(); ++k) n += parents(k, 0) == parents(k, 1);
+  return n;
+}
+
+std::string inserted_vertices_description(const InsertedVertexRecord& record) {
+  const int copies = record.copies(), splits = static_cast<int>(record.parents.rows()) - copies;
+  std::string s;
+  if (copies > 0) s = std::to_string(copies) + (copies == 1 ? " copy" : " copies") + " of the vertices along the cut that opened the surface";
+  if (splits > 0)
+    s += (s.empty() ? "" : " and ") + std::to_string(splits) + (splits == 1 ? " vertex" : " vertices") +
+         " the flattening inserted (corner and ear splits)";
+  return s;
+}
+
 MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int count, const std::string& path) {
+  const InsertedVertexRecord record = parse_inserted_vertices(text, static_cast<int>(V.rows()), count, path);
+  return extend_to_inserted(V, record.parents, record.weight);  // the flattening's own rule
+}
+
+InsertedVertexRecord parse_inserted_vertices(const std::string& text, int num_input, int count, const std::string& path) {
   MatrixXi parents(count, 2);
   VectorXd weight(count);
   std::istringstream in(text);
@@ -87,7 +108,7 @@ MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int
     long long p0 = -1, p1 = -1;
     double w = NAN;
     std::string rest;
-    const Eigen::Index self = V.rows() + k;
+    const Eigen::Index self = num_input + k;
     if (!(fields >> p0 >> p1 >> w) || (fields >> rest) || k >= count || p0 < 0 || p1 < 0 || p0 >= self || p1 >= self ||
         !(w >= 0 && w <= 1))
       throw InputError(path + ": metadata " + kInsertedVerticesKey + " entry " + std::to_string(k + 1) + " ('" + item +
@@ -100,7 +121,7 @@ MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int
   if (k != count)
     throw InputError(path + ": metadata " + kInsertedVerticesKey + " describes " + std::to_string(k) + " inserted vertices but the map has " +
                      std::to_string(count) + "; the file was changed after authalic wrote it");
-  return extend_to_inserted(V, parents, weight);  // the flattening's own rule
+  return {parents, weight};
 }
 
 nlohmann::json flow_json(const FlowReport& r, const FlowOptions& o) {

@@ -38,6 +38,19 @@ bool is_left_hemisphere(const std::map<std::string, std::string>& metadata, cons
 // measures every face of the map, as flatten does.
 inline constexpr const char* kInsertedVerticesKey = "authalic_inserted_vertices";
 std::string inserted_vertices_text(const MatrixXi& parents, const VectorXd& weight);
+// The record's rows, checked (see place_inserted_vertices): vertex num_input + k lies at
+// (1 - weight(k)) parents(k, 0) + weight(k) parents(k, 1). A row with both parents the same is a
+// copy of that vertex (the cut of `rectangle --surface` records its copies so), the others split
+// an edge (flatten's corner and ear splits).
+struct InsertedVertexRecord {
+  MatrixXi parents;
+  VectorXd weight;
+  int copies() const;  // rows with both parents the same
+};
+InsertedVertexRecord parse_inserted_vertices(const std::string& text, int num_input, int count, const std::string& path);
+// What the record's vertices are, for a note: "237 copies of the vertices along the cut that opened
+// the surface", "12 vertices the flattening inserted (corner and ear splits)", or both.
+std::string inserted_vertices_description(const InsertedVertexRecord& record);
 // The surface positions V (num_input rows; any columns, e.g. positions and values side by side)
 // extended by the inserted vertices described by `text`; `count` of them are expected. Throws InputError naming `path` for text that does not
 // describe them (wrong count, a parent not yet defined, a weight outside [0, 1]).

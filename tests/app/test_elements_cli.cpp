@@ -156,6 +156,46 @@ TEST(ElementsCli, ElementImageIsPlacedAlikeByNibabelAndWorkbench) {
   EXPECT_NE(descrip.find("map grid, element 25 mm^2"), std::string::npos) << descrip;
 }
 
+// The note on the vertices a map appends to the surface's says what they are (QA 4 item 8: the
+// copies the cut of `rectangle --surface` makes were called "vertices appended by the
+// flattening"): a record row "v v 0" is a copy of v, "a b t" a split of edge ab.
+TEST(ElementsCli, NoteSaysWhatTheMapsAppendedVerticesAre) {
+  const std::string dir = test::temp_dir("elements_cli_appended");
+  const int n = 9;
+  TriMesh surface = unit_grid(n);
+  surface.V *= 40.0;
+  TriMesh map = unit_grid(n);
+  const int nv = n * n, copy = nv, split = nv + 1;
+  map.V.conservativeResize(nv + 2, 3);
+  map.V.row(copy) = map.V.row(0);                                // vertex 0 copied (as a cut copies its path)
+  map.V.row(split) = 0.5 * (map.V.row(1) + map.V.row(2));        // boundary edge (1, 2) split at its middle
+  ASSERT_EQ(map.F(0, 0), 0);
+  map.F(0, 0) = copy;                                            // face (0, 1, n + 1) on the copy
+  ASSERT_EQ(map.F(2, 0), 1);
+  ASSERT_EQ(map.F(2, 1), 2);
+  map.F(2, 1) = split;                                           // face (1, 2, n + 2) -> (1, m, n + 2) + (m, 2, n + 2)
+  map.F.conservativeResize(map.F.rows() + 1, 3);
+  map.F.row(map.F.rows() - 1) << split, 2, n + 2;
+  io::SurfaceWriteOptions wo;
+  wo.metadata = {{"authalic_inserted_vertices", "0 0 0;1 2 0.5"}};
+  io::write_surface(dir + "/cortex.surf.gii", surface);
+  io::write_surface(dir + "/map.surf.gii", map, wo);
+  io::write_per_vertex(dir + "/v.func.gii", surface.V.col(0));
+  std::string out;
+  ASSERT_EQ(test::run_command(test::authalic_binary() + " elements " + dir + "/cortex.surf.gii " + dir + "/map.surf.gii " + dir +
+                                  "/v.func.gii " + dir + "/el --k 4 --json",
+                              &out),
+            0)
+      << out;
+  const auto j = nlohmann::json::parse(out.substr(out.find('{')));
+  EXPECT_EQ(j["inserted_vertices"], 2);
+  EXPECT_NEAR(j["total_area_mm2"].get<double>(), 1600.0, 1e-6);  // every face measured
+  EXPECT_EQ(j["notes"], nlohmann::json::array({"1 copy of the vertices along the cut that opened the surface and 1 vertex the "
+                                                "flattening inserted (corner and ear splits): placed from the map's "
+                                                "authalic_inserted_vertices record"}))
+      << out;
+}
+
 // The label file's GIFTI structure (QA 4 item 4: `elements` wrote none, wb_command said "Structure:
 // Invalid", even with --hemisphere left; the hemisphere went into the table only). It follows the
 // table's hemisphere wherever that is known: given, the surface's own structure, the map's, or the
@@ -325,6 +365,11 @@ TEST(ElementsCliRealData, MapsOfTheOtherCommandsPairWithTheirSurface) {
   ASSERT_EQ(test::run_command(exe + " rectangle " + dir + "/rect.surf.gii --surface " + white + " --metrics " + dir + "/rect.json -q", &out), 0)
       << out;
   EXPECT_NEAR(total_area(dir + "/rect.surf.gii", "rectangle"), whole, 1e-6 * whole);
+  // The cut's copies are named as such (QA 4 item 8: "appended by the flattening").
+  EXPECT_NE(out.find(" copies of the vertices along the cut that opened the surface: placed from the map's authalic_inserted_vertices record"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(out.find("flattening"), std::string::npos) << out;
   ASSERT_EQ(test::run_command(exe + " metrics " + white + " " + dir + "/rect.surf.gii --domain rectangle --json", &out), 0) << out;
   const double cv = nlohmann::json::parse(out.substr(out.find('{')))["element_cv"].get<double>();
   const double own = nlohmann::json::parse(std::ifstream(dir + "/rect.json"))["metrics"]["element_cv"].get<double>();
