@@ -1062,6 +1062,7 @@ void write_hemisphere_zscores(const Hemisphere& h, const std::vector<double>& z,
   io::FuncWriteOptions zo;
   zo.column_names = {"z"};
   zo.anatomical_structure = h.left ? "CortexLeft" : "CortexRight";
+  zo.intent = 5;  // NIFTI_INTENT_ZSCORE, as the element z image
   zo.metadata = {{"description", "z of each vertex's equal-area element (NaN: in no element)"}, {"units", "z"}};
   const std::string zfunc = out.names.zscore(h.tag);
   io::write_per_vertex((out.stage / zfunc).string(), element_values_at_vertices(h.elements.vertex_element, z.data(),

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <map>
 #include <sstream>
 
@@ -18,16 +19,28 @@ nlohmann::json stats_json(const AbsStats& s) {
 }
 }  // namespace
 
-nlohmann::json acceptance_json(const std::string& problem, const MapMetrics& accepted, bool element_cv_checked) {
+nlohmann::json acceptance_json(const std::string& problem, const MapMetrics& accepted, bool element_cv_checked, double vertex_mean) {
   const AuthalicAcceptance limits;
+  const int elements = accepted.element_cols * accepted.element_rows;
   const std::string grid = std::to_string(accepted.element_cols) + "x" + std::to_string(accepted.element_rows);
   nlohmann::json cv = nullptr;
   if (element_cv_checked) cv = element_cv_limit(accepted, limits);
+  // The second term exceeds the first below (3 sd / max_cv)^2 faces per element: 900, i.e. below
+  // 921,600 faces on 32x32 and 1,843,200 on 64x32, which covers cortical meshes at native resolution.
+  const double ratio = 3 * limits.coarse_face_sd / limits.max_element_cv;
+  const long long looser_below = std::llround(ratio * ratio);
   std::ostringstream rule;  // default precision: "max(0.01, 3 x 0.1 / ...)"
-  rule << "max(" << limits.max_element_cv << ", 3 x " << limits.coarse_face_sd
-       << " / sqrt(faces per element)): looser only on coarse meshes, whose elements hold few faces";
+  rule << "max(" << limits.max_element_cv << ", 3 x " << limits.coarse_face_sd << " / sqrt(faces per element)): above "
+       << limits.max_element_cv << " whenever an element holds fewer than " << looser_below << " faces, i.e. on meshes of fewer than "
+       << looser_below * elements << " faces on this " << grid << " grid (this map: " << accepted.faces << " faces, "
+       << std::setprecision(4) << (elements > 0 ? double(accepted.faces) / elements : 0.0) << " per element)";
   return {{"passed", problem.empty()},
           {"problem", problem},
+          // What the acceptance measured (on its grid, whatever --k the metrics use).
+          {"measured",
+           {{"flips", accepted.flips},
+            {"element_cv_" + grid, accepted.element_cv},
+            {"vertex_ln_area_abs_mean", std::isnan(vertex_mean) ? accepted.vertex_ln_area.mean : vertex_mean}}},
           {"limits",
            {{"flips", 0},
             {"element_cv_" + grid, cv},

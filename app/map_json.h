@@ -3,6 +3,7 @@
 // (sphere, rectangle) so their metrics files use the same keys.
 #include <nlohmann/json.hpp>
 
+#include <limits>
 #include <map>
 #include <string>
 
@@ -16,11 +17,14 @@ namespace authalic::app {
 //  "element_max_over_mean", "element_mean_mm2", "surface_area_mm2", "domain_area", "outside_fraction"}
 nlohmann::json metrics_json(const MapMetrics& m);
 
-// The acceptance record of a map (core/metrics.h): passed, the problem ("" if passed) and the
-// limits applied to `accepted` (the metrics the acceptance measured): the element CV's on its grid
-// (e.g. "element_cv_32x32"), the coarse-mesh limit where that is larger (with the rule that gives
-// it), or null when the element CV is not checked (a measure-controlled map).
-nlohmann::json acceptance_json(const std::string& problem, const MapMetrics& accepted, bool element_cv_checked);
+// The acceptance record of a map (core/metrics.h): passed, the problem ("" if passed), what it
+// measured ("measured": flips, the element CV on its grid, e.g. "element_cv_32x32", even when the
+// metrics use another --k, and the per-vertex mean |ln area ratio| it checked: vertex_mean, NaN =
+// accepted's own) and the limits applied to `accepted`: the element CV's on its grid, the
+// coarse-mesh limit where that is larger (with the rule that gives it and where it is larger), or
+// null when the element CV is not checked (a measure-controlled map).
+nlohmann::json acceptance_json(const std::string& problem, const MapMetrics& accepted, bool element_cv_checked,
+                               double vertex_mean = std::numeric_limits<double>::quiet_NaN());
 
 // The flow's report and the options it ran with (flatten's and rectangle's "flow" object).
 nlohmann::json flow_json(const FlowReport& r, const FlowOptions& o);

@@ -146,6 +146,14 @@ TEST(NormativeCli, BuildMergeCompare) {
     EXPECT_NEAR(zv(1), z11, 1e-5) << nib;  // element 5 = (row 1, col 1)
     EXPECT_NEAR(area, 50.0, 1e-3) << nib;   // the table's element area (mm^2)
     EXPECT_NE(nib.find("map grid, element 50 mm^2"), std::string::npos) << nib;
+    // The per-vertex z carries the same intent (QA 4 item 10: its data array said NONE).
+    std::string func;
+    ASSERT_EQ(test::run_command("/usr/bin/python3 -c \"import nibabel as nib; d = nib.load('" + dir +
+                                    "/cmp_z.func.gii').darrays[0]; print(d.intent, nib.nifti1.intent_codes.niistring[d.intent])\"",
+                                &func),
+              0)
+        << func;
+    EXPECT_EQ(func, "5 NIFTI_INTENT_ZSCORE\n");
   } else if (test::running_in_ci()) {
     FAIL() << "CI=true but /usr/bin/python3 with nibabel is missing";
   }

@@ -26,6 +26,7 @@
 
 #include "common/test_data.h"
 #include "core/mesh.h"
+#include "io/surface_formats.h"
 #include "io/surface_io.h"
 
 namespace fs = std::filesystem;
@@ -162,6 +163,10 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   const int nv = authalic::io::read_surface((root / white[1].str()).string()).mesh.num_vertices();
   const authalic::VectorXd z = authalic::io::read_per_vertex((subject / (stem + "_hemi-L_zscore.func.gii")).string(), nv);
   EXPECT_LT(z.array().isNaN().select(0.0, z.array()).minCoeff(), -2.0) << "the planted region is hypometabolic";
+  // QA 4 item 10: the per-vertex z says it is a z-score, as the element z image does.
+  EXPECT_EQ(authalic::io::detail::read_gifti((subject / (stem + "_hemi-L_zscore.func.gii")).string()).column_intents,
+            std::vector<int>{5})
+      << "NIFTI_INTENT_ZSCORE";
   const authalic::VectorXd labels = authalic::io::read_per_vertex((subject / (stem + "_hemi-L_desc-elements_dseg.label.gii")).string(), nv);
   EXPECT_GT(labels.maxCoeff(), 1000.0);  // element ids + 1 up to K^2 = 1024
 
