@@ -362,16 +362,47 @@ ElementResult compute_elements(const ElementMap& map, const ElementGrid& grid, c
   return r;
 }
 
-double element_area_cv(const ElementBlock& block, int col_begin, int col_end) {
-  double sum = 0, sum2 = 0;
-  int n = 0;
+ElementAreaStats element_area_stats(const ElementBlock& block, int col_begin, int col_end) {
+  ElementAreaStats st;
+  double sum = 0, sum2 = 0, lo = INFINITY, hi = -INFINITY;
   for (const auto& e : block.elements)
-    if (e.col >= col_begin && e.col < col_end) sum += e.area_mm2, ++n;
-  if (n == 0) return std::nan("");
-  const double mean = sum / n;
+    if (e.col >= col_begin && e.col < col_end) {
+      sum += e.area_mm2, ++st.count;
+      lo = std::min(lo, e.area_mm2), hi = std::max(hi, e.area_mm2);
+    }
+  if (st.count == 0) return st;
+  const double mean = sum / st.count;
   for (const auto& e : block.elements)
     if (e.col >= col_begin && e.col < col_end) sum2 += (e.area_mm2 - mean) * (e.area_mm2 - mean);
-  return mean > 0 ? std::sqrt(sum2 / n) / mean : 0.0;
+  st.mean_mm2 = mean;
+  st.cv = mean > 0 ? std::sqrt(sum2 / st.count) / mean : 0.0;
+  if (mean > 0) st.min_over_mean = lo / mean, st.max_over_mean = hi / mean;
+  return st;
+}
+
+double element_area_cv(const ElementBlock& block, int col_begin, int col_end) {
+  return element_area_stats(block, col_begin, col_end).cv;
+}
+
+RectanglePartCells rectangle_part_cells(const MatrixXd& D, const MatrixXi& F, const ElementGrid& grid) {
+  RectanglePartCells p;
+  if (grid.domain.kind != DomainKind::Rectangle || F.rows() == 0) return p;
+  double lo = INFINITY, hi = -INFINITY;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c) lo = std::min(lo, D(F(f, c), 0)), hi = std::max(hi, D(F(f, c), 0));
+  if (hi - lo > 1.9) return p;
+  const double seam = std::isfinite(grid.domain.seam_x) ? grid.domain.seam_x : 1.0, K = grid.k;
+  p.is_part = true;
+  p.right = 0.5 * (lo + hi) > seam;
+  p.col_begin = p.right ? static_cast<int>(std::ceil(seam * K - 1e-9)) : 0;
+  p.col_end = p.right ? grid.cols : static_cast<int>(std::floor(seam * K + 1e-9));
+  return p;
+}
+
+std::string rectangle_part_note(const RectanglePartCells& part) {
+  return std::string("the map is the ") + (part.right ? "right" : "left") +
+         " hemisphere's part of a two-hemisphere rectangle: only the cells on its side of the seam hold cortex (area CV over the " +
+         std::to_string(part.col_end - part.col_begin) + " columns wholly on its side)";
 }
 
 std::vector<double> block_values(const ElementBlock& block) {
@@ -600,8 +631,8 @@ void write_element_nifti(const std::string& path, const std::vector<float>& data
   image.vox2ras = Eigen::Vector4d(side, side, 1.0, 1.0).asDiagonal();
   io::NiftiWriteOptions o;
   char area[48];
-  std::snprintf(area, sizeof(area), "; map grid, element %.4g mm^2", element_area_mm2);
-  o.description = description + area;
+  std::snprintf(area, sizeof(area), "; %s, element %.4g mm^2", io::kMapGridMarker, element_area_mm2);
+  o.description = description.substr(0, 79 - std::string(area).size()) + area;  // the header keeps 79 characters: the area stays
   o.map_grid = true;
   if (kind == ElementImageKind::kZScore) {
     o.intent_code = 5;  // NIFTI_INTENT_ZSCORE (nifti1.h; not included here beside gifti_io.h's copy)
@@ -674,7 +705,7 @@ ElementOutputPaths write_element_outputs(const std::string& prefix, const Elemen
   so.title = "Equal-area elements (" + units + ")";
   io::write_png(p.png_3d, render_surface_views(V_scanner, F, c, {View::Lateral, View::Medial}, so, &result.vertex_element));
 
-  write_element_labels(p.label, result, g);
+  write_element_labels(p.label, result, g, block.hemisphere);
   return p;
 }
 
@@ -685,7 +716,8 @@ VectorXd element_values_at_vertices(const VectorXi& vertex_element, const double
   return out;
 }
 
-void write_element_labels(const std::string& path, const ElementResult& result, const ElementGrid& g) {
+void write_element_labels(const std::string& path, const ElementResult& result, const ElementGrid& g,
+                          const std::string& hemisphere) {
   const ElementBlock& block = result.block;
   VectorXi keys = (result.vertex_element.array() + 1).matrix();
   std::map<int, std::string> names{{0, "none"}};
@@ -693,8 +725,8 @@ void write_element_labels(const std::string& path, const ElementResult& result, 
     names[e.id + 1] = "element " + std::to_string(e.id) + " (row " + std::to_string(e.row) + ", col " + std::to_string(e.col) + ")";
   io::FuncWriteOptions fo;
   fo.column_names = {"element"};
-  if (block.hemisphere == "left") fo.anatomical_structure = "CortexLeft";
-  if (block.hemisphere == "right") fo.anatomical_structure = "CortexRight";
+  if (hemisphere == "left") fo.anatomical_structure = "CortexLeft";
+  if (hemisphere == "right") fo.anatomical_structure = "CortexRight";
   fo.metadata = {{"description", "authalic equal-area element of each vertex: key = element id + 1 (id = row * cols + col), 0 = none"},
                  {"domain", to_string(g.domain)},
                  {"k", std::to_string(g.k)},

@@ -39,7 +39,10 @@ struct ElementGrid {
   int num_elements() const { return rows * cols; }
 };
 // The map-file metadata key that carries Domain::seam_x ("none" for one surface), and its text.
+// kSeamKey is in rectangle units (x in [0, 2]: the map files); a file scaled to mm (`rectangle
+// --flat`, run's space-authalicrect_flat) records the seam in its own units under kSeamMmKey.
 inline constexpr const char* kSeamKey = "authalic_seam_x";
+inline constexpr const char* kSeamMmKey = "authalic_seam_x_mm";
 std::string seam_text(double seam_x);
 // seam_x from that metadata text (what: the file, for the error): "none" -> NaN; a number in (0, 2).
 double parse_seam(const std::string& text, const std::string& what);
@@ -139,29 +142,56 @@ ElementOutputPaths element_output_paths(const std::string& prefix);
 // Writes, for a one-block table and its result on a surface (V_scanner: RAS mm, F: its faces):
 //   PREFIX.tsv + PREFIX.json   the element table (write_element_table)
 //   PREFIX.nii.gz              cols x rows x 1 float image of element values (voxel (col, row));
-//                              the grid is the domain's, not a scanner space (write_element_nifti)
+//                              the grid is the domain's own space, not a scanner's (write_element_nifti)
 //   PREFIX_area.nii.gz         the same with element areas (mm^2)
 //   PREFIX.png                 the element image with a colour bar and units
 //   PREFIX_3d.png              lateral and medial views coloured by element value, grid drawn
-//   PREFIX.label.gii           per-vertex element as a GIFTI label: key = element id + 1, 0 = none
+//   PREFIX.label.gii           per-vertex element as a GIFTI label: key = element id + 1, 0 = none,
+//                              structure CortexLeft/CortexRight from the table's hemisphere
 // All atomic. `left` picks the lateral side for the 3D views.
 ElementOutputPaths write_element_outputs(const std::string& prefix, const ElementTable& table, const ElementResult& result,
                                          const MatrixXd& V_scanner, const MatrixXi& F, bool left);
 
 // An element image (cols x rows x blocks float, voxel (col, row, block) holds element
 // row * cols + col of that block) as NIfTI. The grid lives on the map, not in a scanner: sform and
-// qform codes 0 (unknown), so no viewer lays it over anatomy; x and y voxel sizes are
-// sqrt(element area) mm (mm of cortex per element side), z 1. kZScore images carry
-// NIFTI_INTENT_ZSCORE. The description (header descrip) ends with the element area. Atomic.
+// qform code 5 (NIFTI_XFORM_TEMPLATE_OTHER, the element grid's own space, io::NiftiWriteOptions::
+// map_grid) with the affine diag(s, s, 1), s = sqrt(element area) mm (mm of cortex per element
+// side): voxel (i, j, k) at (i s, j s, k) mm in every tool, and read_volume refuses it as a PET.
+// kZScore images carry NIFTI_INTENT_ZSCORE. The description (header descrip) ends with "map grid,
+// element <area> mm^2". Atomic.
 enum class ElementImageKind { kValues, kAreas, kZScore };
 void write_element_nifti(const std::string& path, const std::vector<float>& data, const ElementGrid& grid, int blocks,
                          double element_area_mm2, ElementImageKind kind, const std::string& description);
 // Mean element area (mm^2) of a block, or over a table's blocks: the cortical area per element
 // (over the elements that hold cortex).
 double mean_element_area(const ElementBlock& block);
-// Coefficient of variation (population SD / mean) of the areas of a block's elements in columns
-// [col_begin, col_end) (all by default); NaN when none is there, 0 when their mean is 0.
+// Area statistics of a block's elements in columns [col_begin, col_end) (all by default): their
+// count, mean area (mm^2), coefficient of variation (population SD / mean; 0 when the mean is 0)
+// and smallest and largest area over the mean; NaN when no element is there.
+struct ElementAreaStats {
+  int count = 0;
+  double mean_mm2 = std::numeric_limits<double>::quiet_NaN();
+  double cv = std::numeric_limits<double>::quiet_NaN();
+  double min_over_mean = std::numeric_limits<double>::quiet_NaN(), max_over_mean = std::numeric_limits<double>::quiet_NaN();
+};
+ElementAreaStats element_area_stats(const ElementBlock& block, int col_begin = 0, int col_end = std::numeric_limits<int>::max());
+// Its coefficient of variation.
 double element_area_cv(const ElementBlock& block, int col_begin = 0, int col_end = std::numeric_limits<int>::max());
+
+// One hemisphere's part of a two-hemisphere rectangle (`rectangle --lh/--rh` writes one file per
+// part): it fills the cells on its side of the seam (grid.domain.seam_x; x = 1 when unknown) and
+// leaves the others empty, so its element statistics are those of the cells wholly on its side
+// (over all cells its area CV would be near 1). D: the map's vertices in rectangle units (x in
+// column 0), F: its triangles; a map whose triangles span more than 1.9 in x fills the whole
+// rectangle. `elements` and `metrics` both measure a part this way.
+struct RectanglePartCells {
+  bool is_part = false;
+  bool right = false;
+  int col_begin = 0, col_end = 0;  // the cells wholly inside the part: columns [begin, end)
+};
+RectanglePartCells rectangle_part_cells(const MatrixXd& D, const MatrixXi& F, const ElementGrid& grid);
+// The note both commands print for a part: which hemisphere's part, over which columns.
+std::string rectangle_part_note(const RectanglePartCells& part);
 double mean_element_area(const ElementTable& table);
 // One block's element values (value, or area_mm2 with areas = true) as the data of a cols x rows
 // element image (voxel (col, row) = element row * cols + col), for write_element_nifti.
@@ -172,8 +202,11 @@ std::vector<float> element_image(const ElementBlock& block, const ElementGrid& g
 VectorXd element_values_at_vertices(const VectorXi& vertex_element, const double* element_values, int num_elements);
 
 // Per-vertex element of a result as a GIFTI label file: key = element id + 1 (id = row * cols +
-// col), 0 = in no element; the label table names each element's row and column. Atomic.
-void write_element_labels(const std::string& path, const ElementResult& result, const ElementGrid& grid);
+// col), 0 = in no element; the label table names each element's row and column. `hemisphere`
+// ("left", "right"; the table's block) gives the GIFTI structure (CortexLeft, CortexRight; none for
+// "both" or "unknown"), so Workbench shows the file on that hemisphere. Atomic.
+void write_element_labels(const std::string& path, const ElementResult& result, const ElementGrid& grid,
+                          const std::string& hemisphere);
 
 // Element values of one block as a rows x cols image (row 0 at the bottom), e.g. for render.h.
 std::vector<double> block_values(const ElementBlock& block);

@@ -950,6 +950,7 @@ ComparisonOutputPaths write_comparison_outputs(const std::string& prefix, const 
     fo.column_names = {"z"};
     if (hemi == "left") fo.anatomical_structure = "CortexLeft";
     if (hemi == "right") fo.anatomical_structure = "CortexRight";
+    fo.intent = 5;  // NIFTI_INTENT_ZSCORE, as the element z image
     fo.metadata = {{"description", "z = (patient - expected) / SD of the vertex's equal-area element"},
                    {"reference", reference_path},
                    {"normalisation", ref.normalisation},

@@ -395,8 +395,9 @@ json clusters_tsv_sidecar(double threshold) {
 // The element images' space, for their sidecars (write_element_nifti's header convention).
 std::string element_space_note(double element_area_mm2) {
   std::ostringstream s;
-  s << "the authalic map's element grid, not a scanner space (NIfTI sform/qform codes 0); voxel (i, j) = element column i, "
-       "row j from the bottom; voxel size sqrt(element area) mm, element area "
+  s << "the authalic map's element grid, its own space, not a scanner's (NIfTI sform/qform code 5, NIFTI_XFORM_TEMPLATE_OTHER, "
+       "affine diag(s, s, 1) with s = sqrt(element area) mm: voxel (i, j) at (i s, j s, 0) mm); voxel (i, j) = element column i, "
+       "row j from the bottom; element area "
     << element_area_mm2 << " mm^2 of cortex";
   return s.str();
 }
@@ -1023,7 +1024,7 @@ void write_rectangle_part(const Hemisphere& h, const HemisphereRectangles& rect,
   rflat.F = part.F;
   io::SurfaceWriteOptions ro = wo;
   ro.metadata["space"] = "authalic whole-brain 2:1 rectangle scaled to the cortical area of both hemispheres (mm)";
-  ro.metadata[kSeamKey] = seam_text(rect.split);  // in [0, 2] units, as `rectangle` records it
+  ro.metadata[kSeamMmKey] = seam_text(rect.split * std::sqrt(total / 2.0));  // in the file's units (mm), as `rectangle --flat` records it
   const std::string rect_name = out.names.rectangle_flat(h.tag);
   io::write_surface((out.stage / rect_name).string(), rflat, ro);
   if (rflat.num_vertices() == h.white.mesh.num_vertices()) out.spec.push_back({wo.anatomical_structure, "SURFACE", rect_name});
@@ -1064,7 +1065,7 @@ void write_hemisphere_pet(const Hemisphere& h, const ElementTable& table, int K,
                 render_element_grid(block_values(h.elements.block), K, K, c, 12, h.name + " PET elements"));
   out.sidecars.add(png_name, {{"description", "element PET values"}});
   const std::string labels_name = out.names.element_labels(h.tag);
-  write_element_labels((out.stage / labels_name).string(), h.elements, table.grid);
+  write_element_labels((out.stage / labels_name).string(), h.elements, table.grid, h.elements.block.hemisphere);
   out.spec.push_back({wo.anatomical_structure, "LABEL", labels_name});
   out.sidecars.add(labels_name, {{"description", "each vertex's equal-area element: key = element id + 1 (id = row x K + column), 0 = "
                                                  "in no element; pairs with the white and pial surfaces (the input's vertices)"},
@@ -1097,6 +1098,7 @@ void write_hemisphere_zscores(const Hemisphere& h, const std::vector<double>& z,
   io::FuncWriteOptions zo;
   zo.column_names = {"z"};
   zo.anatomical_structure = h.left ? "CortexLeft" : "CortexRight";
+  zo.intent = 5;  // NIFTI_INTENT_ZSCORE, as the element z image
   zo.metadata = {{"description", "z of each vertex's equal-area element (NaN: in no element)"}, {"units", "z"}};
   const std::string zfunc = out.names.zscore(h.tag);
   io::write_per_vertex((out.stage / zfunc).string(), element_values_at_vertices(h.elements.vertex_element, z.data(),

@@ -15,6 +15,7 @@
 #include "app/command.h"
 #include "app/map_json.h"
 #include "core/error.h"
+#include "core/square_map.h"
 #include "core/version.h"
 #include "io/surface_formats.h"
 #include "io/surface_io.h"
@@ -91,27 +92,6 @@ MatrixXi faces_in_map_region(const MatrixXi& F, const MatrixXi& map_F, int num_v
   return out;
 }
 
-// One hemisphere's part of a two-hemisphere rectangle (`rectangle --lh/--rh` writes one file per
-// part; issue 19): it fills the cells on its side of the seam, and the others stay empty. Its
-// area CV is that of the cells wholly on its side (over all cells it would be near 1).
-struct RectanglePartCells {
-  bool is_part = false;
-  bool right = false;
-  int col_begin = 0, col_end = 0;  // the cells wholly inside the part: columns [begin, end)
-};
-RectanglePartCells rectangle_part_cells(const analysis::ElementMap& em, const analysis::ElementGrid& grid) {
-  RectanglePartCells p;
-  if (grid.domain.kind != DomainKind::Rectangle || em.D.rows() == 0) return p;
-  const double lo = em.D.col(0).minCoeff(), hi = em.D.col(0).maxCoeff();
-  if (hi - lo > 1.9) return p;
-  const double seam = std::isfinite(grid.domain.seam_x) ? grid.domain.seam_x : 1.0, K = grid.k;
-  p.is_part = true;
-  p.right = 0.5 * (lo + hi) > seam;
-  p.col_begin = p.right ? static_cast<int>(std::ceil(seam * K - 1e-9)) : 0;
-  p.col_end = p.right ? grid.cols : static_cast<int>(std::floor(seam * K + 1e-9));
-  return p;
-}
-
 int run_elements(const ElementsArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   io::check_file_roles({a.surface, a.map, a.values}, analysis::element_output_paths(a.prefix).all());
@@ -130,18 +110,21 @@ int run_elements(const ElementsArgs& a) {
 
   const auto compute_start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
-  // Vertices the flattening appended (corner and ear splits): placed on the surface, with their
-  // values, from the map's record of them (flatten writes it; the disk map always has some), else
-  // traced from the map's triangles.
+  // Vertices the map appended to the surface's: the flattening's corner and ear splits, or the
+  // copies of the vertices along the cut of `rectangle --surface`. Placed on the surface, with their
+  // values, from the map's record of them (flatten and rectangle write it; the disk map always has
+  // some), else (splits only) traced from the map's triangles.
   const int nv = surface.mesh.num_vertices(), inserted = map.mesh.num_vertices() - nv;
   const auto record = map.metadata.find(kInsertedVerticesKey);
   const bool placed = inserted > 0 && record != map.metadata.end();
   MatrixXd V3 = surface.mesh.V;
   VectorXd vertex_values = values;
+  InsertedVertexRecord appended;
   if (placed) {  // positions and values by the same linear rule, the record read once
     MatrixXd columns(nv, 4);
     columns << surface.mesh.V.leftCols(3), values;
-    const MatrixXd all = place_inserted_vertices(columns, record->second, inserted, a.map);
+    appended = parse_inserted_vertices(record->second, nv, inserted, a.map);
+    const MatrixXd all = extend_to_inserted(columns, appended.parents, appended.weight);
     V3 = all.leftCols(3);
     vertex_values = all.col(3);
   }
@@ -154,25 +137,29 @@ int run_elements(const ElementsArgs& a) {
   if (placed) {  // the per-vertex outputs pair with the surface: its vertices only
     em.num_surface_vertices = nv;
     em.inserted_vertices = inserted;
-    em.notes.push_back(std::to_string(inserted) + " vertices appended by the flattening were placed from the map's " +
-                       kInsertedVerticesKey + " record");
+    em.notes.push_back(inserted_vertices_description(appended) + ": placed from the map's " + kInsertedVerticesKey + " record");
   }
   analysis::ElementResult result = analysis::compute_elements(em, grid, surface.to_scanner);
-  const RectanglePartCells part = rectangle_part_cells(em, grid);
+  const analysis::RectanglePartCells part = analysis::rectangle_part_cells(em.D, em.F, grid);
   if (part.is_part) {
     result.area_cv = analysis::element_area_cv(result.block, part.col_begin, part.col_end);
-    em.notes.push_back(std::string("the map is the ") + (part.right ? "right" : "left") +
-                       " hemisphere's part of a two-hemisphere rectangle: only the cells on its side of the seam hold cortex (area CV over the " +
-                       std::to_string(part.col_end - part.col_begin) + " columns wholly on its side)");
+    em.notes.push_back(analysis::rectangle_part_note(part));
   }
   const double compute_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - compute_start).count();
   const double compute_cpu_seconds = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;  // all threads
 
   analysis::ElementTable table;
   table.grid = grid;
-  std::string hemisphere = a.hemisphere.empty() ? analysis::hemisphere_of(surface.metadata, a.surface) : a.hemisphere;
-  if (domain.kind == DomainKind::Rectangle && a.hemisphere.empty())
-    hemisphere = !part.is_part ? "both" : hemisphere == "left" || hemisphere == "right" ? hemisphere : part.right ? "right" : "left";
+  // The hemisphere: as given, else the surface's GIFTI structure, else the map's (flatten and
+  // rectangle copy it; a rectangle part has its own), else the part of the rectangle the map fills,
+  // else (square, sphere, disk) the surface's file name; a whole rectangle of unknown side is "both".
+  std::string hemisphere = a.hemisphere;
+  if (hemisphere.empty()) hemisphere = analysis::hemisphere_of(surface.metadata, "");
+  if (hemisphere == "unknown") hemisphere = analysis::hemisphere_of(map.metadata, "");
+  if (hemisphere == "unknown" && domain.kind == DomainKind::Rectangle) hemisphere = !part.is_part ? "both" : part.right ? "right" : "left";
+  if (hemisphere == "unknown") hemisphere = analysis::hemisphere_of({}, a.surface);
+  // The table's block and every per-vertex output (the label file's GIFTI structure) say the same.
+  result.block.hemisphere = hemisphere;
   table.blocks.push_back({hemisphere, result.block.elements});
   auto from_meta = [&](const std::string& key, const std::string& fallback) {
     const auto it = meta.find(key);

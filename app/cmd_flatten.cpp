@@ -493,8 +493,8 @@ void run(const FlattenArgs& a) {
   // The per-vertex limit is checked on the number the user is shown (the metrics); with a
   // density the target is not the surface area, so the flow's density-weighted one is used.
   const bool plain = options.density.size() == 0;
-  const std::string problem = authalic_acceptance_problem(
-      accept_metrics, plain ? accept_metrics.vertex_ln_area.mean : r.flow.final_vertex_mean, plain);
+  const double accept_vertex_mean = plain ? accept_metrics.vertex_ln_area.mean : r.flow.final_vertex_mean;
+  const std::string problem = authalic_acceptance_problem(accept_metrics, accept_vertex_mean, plain);
   const std::string failure = a.surface + " (" + region.source + "): the map is not authalic: " + problem;
   // A region of fewer triangles than the acceptance grid's elements (one triangle, one vertex
   // ring) cannot be spread evenly over the square, however long the flow runs: the input is what
@@ -527,7 +527,7 @@ void run(const FlattenArgs& a) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const FlattenTimes times{seconds_map, clock.seconds("initial"), clock.seconds("stretch") + clock.seconds("flow"), seconds};
   nlohmann::json j =
-      flatten_json(a, r, options, region, scale, final_metrics, acceptance_json(problem, accept_metrics, plain), correspondence, times);
+      flatten_json(a, r, options, region, scale, final_metrics, acceptance_json(problem, accept_metrics, plain, accept_vertex_mean), correspondence, times);
   j["domain"] = a.domain;
   if (a.domain == "disk")
     j["disk"] = {{"carry", "Shirley & Chiu's concentric map of the square map (area x pi/4 everywhere)"},

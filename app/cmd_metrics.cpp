@@ -3,11 +3,13 @@
 // ../shared/tools/evalmap.py).
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <sstream>
 
+#include "analysis/elements.h"
 #include "app/command.h"
 #include "app/map_json.h"
 #include "core/error.h"
@@ -61,7 +63,21 @@ void run(const MetricsArgs& a) {
   io::require_vertex_numbering(surface, a.surface, a.map);  // the map pairs with the surface by vertex
   io::require_vertex_numbering(map, a.map, a.surface);
   const int nv = surface.mesh.num_vertices();
-  const Domain domain = Domain::of(parse_domain_kind(a.domain, "--domain"));
+  Domain domain = Domain::of(parse_domain_kind(a.domain, "--domain"));
+  // Where a two-hemisphere rectangle's parts meet, as the file records it: in rectangle units
+  // (the maps of `rectangle --lh/--rh`) or in mm (their --flat copies, run's authalicrect_flat).
+  double seam_mm = std::nan("");
+  if (domain.kind == DomainKind::Rectangle) {
+    if (const auto seam = map.metadata.find(analysis::kSeamKey); seam != map.metadata.end()) {
+      domain.seam_x = analysis::parse_seam(seam->second, a.map);
+    } else if (const auto mm = map.metadata.find(analysis::kSeamMmKey); mm != map.metadata.end() && mm->second != "none") {
+      char* end = nullptr;
+      seam_mm = std::strtod(mm->second.c_str(), &end);
+      if (end == mm->second.c_str() || *end != '\0' || !(seam_mm > 0) || !std::isfinite(seam_mm))
+        throw InputError(a.map + ": metadata " + analysis::kSeamMmKey + " '" + mm->second +
+                         "' is not a seam x in mm or \"none\"; rewrite the map with `authalic rectangle --flat`");
+    }
+  }
   if (map.mesh.num_vertices() < nv)
     throw InputError(a.map + ": has " + std::to_string(map.mesh.num_vertices()) + " vertices, fewer than the " +
                      std::to_string(nv) + " of " + a.surface + "; give a map on the surface's vertex indexing");
@@ -114,14 +130,48 @@ void run(const MetricsArgs& a) {
     for (int v = 0; v < known; ++v)
       if (used[v]) x0 = std::min(x0, U(v, 0)), x1 = std::max(x1, U(v, 0)), y0 = std::min(y0, U(v, 1)), y1 = std::max(y1, U(v, 1));
     const double tol = 1e-6;
-    if (x0 < -tol || y0 < -tol || x1 > W + tol || y1 > 1 + tol || (x1 - x0) < 0.5 * W || (y1 - y0) < 0.5) {
+    const bool inside = x0 >= -tol && y0 >= -tol && x1 <= W + tol && y1 <= 1 + tol;
+    if (std::isfinite(seam_mm)) {
+      // One part of the rectangle scaled to mm: back by its height (the part spans y in [0, 1]),
+      // unshifted in x, so the right part stays on its side of the seam.
+      const double s = 1.0 / std::max(y1 - y0, 1e-300);
+      U.col(0) *= s;
+      U.col(1) = (U.col(1).array() - y0) * s;
+      domain.seam_x = seam_mm * s;
+      rescaled = true;
+    } else if (domain.kind == DomainKind::Rectangle && inside) {
+      // In rectangle units already, the whole rectangle or one hemisphere's part of it (measured
+      // below as `elements` measures it): kept where it is.
+    } else if (!inside || (x1 - x0) < 0.5 * W || (y1 - y0) < 0.5) {
       const double s = 1.0 / std::max(y1 - y0, 1e-300);
       U.col(0) = (U.col(0).array() - x0) * s;
       U.col(1) = (U.col(1).array() - y0) * s;
       rescaled = true;
     }
   }
-  const MapMetrics m = map_metrics(V3, U, F, domain, a.k);
+  MapMetrics m = map_metrics(V3, U, F, domain, a.k);
+  // One hemisphere's part of a two-hemisphere rectangle fills only the cells on its side of the
+  // seam: its element statistics are those of the cells wholly there, as `elements` gives them
+  // (over all cells its CV was near 1, with no word why).
+  const analysis::ElementGrid grid = analysis::element_grid(domain, a.k);
+  const analysis::RectanglePartCells part = analysis::rectangle_part_cells(U, F, grid);
+  if (part.is_part) {
+    const VectorXd cells = element_areas(V3, U, F, domain.width(), grid.cols, grid.rows);  // row-major, row 0 at y = 0
+    analysis::ElementBlock block;
+    for (int id = 0; id < grid.num_elements(); ++id) {
+      analysis::Element e;
+      e.id = id;
+      e.row = id / grid.cols;
+      e.col = id % grid.cols;
+      e.area_mm2 = cells(id);
+      block.elements.push_back(e);
+    }
+    const analysis::ElementAreaStats st = analysis::element_area_stats(block, part.col_begin, part.col_end);
+    m.element_cv = st.cv;
+    m.element_min = st.min_over_mean;
+    m.element_max = st.max_over_mean;
+    m.element_mean_mm2 = st.mean_mm2;
+  }
   nlohmann::json j = metrics_json(m);
   j["surface"] = a.surface;
   j["map"] = a.map;
@@ -129,6 +179,12 @@ void run(const MetricsArgs& a) {
   j["inserted_vertices_placed"] = place ? inserted : 0;
   j["rescaled_to_domain"] = rescaled;
   j["mirrored"] = m.mirrored;
+  j["rectangle_part"] = nullptr;
+  if (part.is_part)
+    j["rectangle_part"] = {{"hemisphere", part.right ? "right" : "left"},
+                           {"seam_x", std::isfinite(domain.seam_x) ? nlohmann::json(domain.seam_x) : nlohmann::json(1.0)},
+                           {"element_columns", {part.col_begin, part.col_end}},
+                           {"note", analysis::rectangle_part_note(part)}};
   if (global_options().json) {
     std::cout << j.dump(2) << '\n';
     return;
@@ -142,9 +198,12 @@ void run(const MetricsArgs& a) {
     << "|ln area ratio| per vertex: mean " << m.vertex_ln_area.mean << ", p95 " << m.vertex_ln_area.p95 << ", p99 "
     << m.vertex_ln_area.p99 << ", max " << m.vertex_ln_area.max << "\n"
     << "Upsilon mean " << m.upsilon_mean << ", Lambda mean " << m.lambda.mean << ", p95 " << m.lambda.p95 << "\n"
-    << "element-area CV (" << m.element_cols << "x" << m.element_rows << ") " << m.element_cv << ", min/mean "
+    << "element-area CV (" << m.element_cols << "x" << m.element_rows;
+  if (part.is_part) s << ", columns " << part.col_begin << "-" << part.col_end - 1 << " of the " << (part.right ? "right" : "left") << " part";
+  s << ") " << m.element_cv << ", min/mean "
     << m.element_min << ", max/mean " << m.element_max << ", mean " << m.element_mean_mm2 << " mm^2"
     << (rescaled ? " (map rescaled to its domain)" : "") << "\n";
+  if (part.is_part) s << "note: " << analysis::rectangle_part_note(part) << "\n";
   std::cout << s.str();
 }
 
@@ -153,7 +212,9 @@ void setup(CLI::App& parent) {
   CLI::App* sub = parent.add_subcommand(
       "metrics",
       "Distortion of a map of a surface: flipped faces, per-face and per-vertex |ln area ratio|, Upsilon and Lambda "
-      "(Zou et al. eq. 23), and the coefficient of variation of the cortical area (mm^2) per element of a K x K grid.");
+      "(Zou et al. eq. 23), and the coefficient of variation of the cortical area (mm^2) per element of a K x K grid. "
+      "With --domain rectangle, one hemisphere's part of a two-hemisphere rectangle (`rectangle --lh/--rh`, also in mm) "
+      "is measured over the cells on its side of the seam, as `elements` measures it.");
   sub->add_option("SURFACE", a->surface, "The 3D surface (mm)")->required();
   sub->add_option("MAP", a->map, "The map on the same vertex indexing (GIFTI or any surface format); its triangles are used")
       ->required();

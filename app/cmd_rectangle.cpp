@@ -235,16 +235,20 @@ void finish(const RectangleArgs& a, const std::vector<const RectanglePart*>& par
   }
 }
 
-// seam_x: where the two hemispheres' parts meet (x in the [0, 2] rectangle), or "none" for one
-// surface; `elements` reads it so that clusters do not cross the seam (analysis::same_part).
+// seam_x: where the two hemispheres' parts meet (x in the [0, 2] rectangle), or NaN for one
+// surface ("none"); `elements` reads it so that clusters do not cross the seam (analysis::same_part).
+// A file scaled to mm (mm_per_unit > 0, --flat) records it in its own units: x = seam_x *
+// mm_per_unit mm, under analysis::kSeamMmKey.
 io::SurfaceWriteOptions flat_options(const std::string& structure, const std::string& what, const std::string& problem,
-                                     const std::string& seam_x) {
+                                     double seam_x, double mm_per_unit = 0) {
   io::SurfaceWriteOptions wo;
   wo.geometric_type = "Flat";
   wo.anatomical_structure = structure;
-  wo.metadata = {{"authalic_map", what},
-                 {"authalic_acceptance", problem.empty() ? "passed" : "FAILED: " + problem},
-                 {analysis::kSeamKey, seam_x}};
+  wo.metadata = {{"authalic_map", what}, {"authalic_acceptance", problem.empty() ? "passed" : "FAILED: " + problem}};
+  if (mm_per_unit > 0)
+    wo.metadata[analysis::kSeamMmKey] = analysis::seam_text(seam_x * mm_per_unit);
+  else
+    wo.metadata[analysis::kSeamKey] = analysis::seam_text(seam_x);
   return wo;
 }
 
@@ -294,14 +298,16 @@ void run_one_surface(const RectangleArgs& a) {
   // (each at its source: "source source 0"), so `metrics` and `elements` pair the map with the
   // input surface and measure every face.
   const std::string copies = cut_copies_text(s.mesh, r);
-  io::SurfaceWriteOptions map_options = flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)", problem, "none");
+  io::SurfaceWriteOptions map_options =
+      flat_options(structure, "rectangle [0,2]x[0,1] (one surface, inferior-medial cut)", problem, std::nan(""));
   if (!copies.empty()) map_options.metadata[kInsertedVerticesKey] = copies;
   io::write_surface(names.map, as_flat_mesh(r.map.UV, r.map.F), map_options);
   if (a.flat) {
     // 1 mm^2 of flat map = 1 mm^2 of cortex: the rectangle (area 2) scaled by sqrt(area / 2).
-    io::SurfaceWriteOptions flat = flat_options(structure, "rectangle scaled to the cortical area (mm)", problem, "none");
+    const double scale = std::sqrt(r.map.area_mm2 / Domain::rectangle().area());
+    io::SurfaceWriteOptions flat = flat_options(structure, "rectangle scaled to the cortical area (mm)", problem, std::nan(""), scale);
     if (!copies.empty()) flat.metadata[kInsertedVerticesKey] = copies;
-    io::write_surface(names.flat, as_flat_mesh(r.map.UV, r.map.F, std::sqrt(r.map.area_mm2 / Domain::rectangle().area())), flat);
+    io::write_surface(names.flat, as_flat_mesh(r.map.UV, r.map.F, scale), flat);
   }
   if (a.cut_surface) {
     io::SurfaceWriteOptions wo;
@@ -371,13 +377,15 @@ void run_two_hemispheres(const RectangleArgs& a) {
   const std::string& problem = checked.problem;
   const SurfaceOutputs names = surface_outputs(a);
   const std::string &lpath = names.lh, &rpath = names.rh;
-  const std::string seam = analysis::seam_text(r.split);
+  const double seam = r.split;
   io::write_surface(lpath, as_flat_mesh(r.left.UV, r.left.F), flat_options("CortexLeft", "rectangle [0,2]x[0,1], left part", problem, seam));
   io::write_surface(rpath, as_flat_mesh(r.right.UV, r.right.F), flat_options("CortexRight", "rectangle [0,2]x[0,1], right part", problem, seam));
   if (a.flat) {
     const double scale = std::sqrt((r.left.area_mm2 + r.right.area_mm2) / Domain::rectangle().area());
-    io::write_surface(names.lh_flat, as_flat_mesh(r.left.UV, r.left.F, scale), flat_options("CortexLeft", "rectangle scaled to the cortical area (mm)", problem, seam));
-    io::write_surface(names.rh_flat, as_flat_mesh(r.right.UV, r.right.F, scale), flat_options("CortexRight", "rectangle scaled to the cortical area (mm)", problem, seam));
+    io::write_surface(names.lh_flat, as_flat_mesh(r.left.UV, r.left.F, scale),
+                      flat_options("CortexLeft", "rectangle scaled to the cortical area (mm)", problem, seam, scale));
+    io::write_surface(names.rh_flat, as_flat_mesh(r.right.UV, r.right.F, scale),
+                      flat_options("CortexRight", "rectangle scaled to the cortical area (mm)", problem, seam, scale));
   }
   auto shading = [&](const io::Surface& s, const std::string& sulc) -> VectorXd {
     if (a.png.empty()) return VectorXd::Zero(s.mesh.num_vertices());
@@ -434,7 +442,8 @@ void setup(CLI::App& parent) {
   sub->add_option("--sulc", a->sulc, "Per-vertex sulcal depth of --surface for the PNG (default: depth below a smoothed copy, mm)")->needs(surface);
   sub->add_option("--lh-sulc", a->lh_sulc, "Per-vertex sulcal depth of --lh for the PNG")->needs(lh);
   sub->add_option("--rh-sulc", a->rh_sulc, "Per-vertex sulcal depth of --rh for the PNG")->needs(rh);
-  sub->add_flag("--flat", a->flat, "Also write the map scaled to the cortical area (1 mm^2 flat = 1 mm^2 cortex): <stem>.flat.surf.gii");
+  sub->add_flag("--flat", a->flat, "Also write the map scaled to the cortical area (1 mm^2 flat = 1 mm^2 cortex): <stem>.flat.surf.gii; "
+                "its metadata authalic_seam_x_mm gives where the hemispheres' parts meet in mm");
   sub->add_flag("--cut-surface", a->cut_surface,
                 "--surface form: also write the 3D surface cut open, on the map's vertices (<stem>.cut.surf.gii)")
       ->needs(surface);

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <map>
 #include <sstream>
 
@@ -18,21 +19,32 @@ nlohmann::json stats_json(const AbsStats& s) {
 }
 }  // namespace
 
-nlohmann::json acceptance_json(const std::string& problem, const MapMetrics& accepted, bool element_cv_checked) {
+nlohmann::json acceptance_json(const std::string& problem, const MapMetrics& accepted, bool element_cv_checked, double vertex_mean) {
   const AuthalicAcceptance limits;
+  const int elements = accepted.element_cols * accepted.element_rows;
   const std::string grid = std::to_string(accepted.element_cols) + "x" + std::to_string(accepted.element_rows);
   nlohmann::json cv = nullptr, deviation = nullptr;
   if (element_cv_checked) cv = element_cv_limit(accepted, limits), deviation = element_deviation_limit(accepted, limits);
-  const double faces_per_element = double(accepted.faces) / std::max(1, accepted.element_cols * accepted.element_rows);
+  // The second term exceeds the first below (3 sd / max_cv)^2 faces per element: 900, i.e. below
+  // 921,600 faces on 32x32 and 1,843,200 on 64x32, which covers cortical meshes at native resolution.
+  const double ratio = 3 * limits.coarse_face_sd / limits.max_element_cv;
+  const long long looser_below = std::llround(ratio * ratio);
   std::ostringstream rule, deviation_rule;  // default precision: "max(0.01, 3 x 0.1 / ...)"
-  rule << "max(" << limits.max_element_cv << ", 3 x " << limits.coarse_face_sd
-       << " / sqrt(faces per element)): 3 standard errors of a map whose faces are off by " << limits.coarse_face_sd
-       << " (SD of ln area ratio); above " << limits.max_element_cv << " where elements hold fewer than "
-       << std::lround(std::pow(3 * limits.coarse_face_sd / limits.max_element_cv, 2)) << " faces (here " << std::lround(faces_per_element) << ")";
+  rule << "max(" << limits.max_element_cv << ", 3 x " << limits.coarse_face_sd << " / sqrt(faces per element)): above "
+       << limits.max_element_cv << " whenever an element holds fewer than " << looser_below << " faces, i.e. on meshes of fewer than "
+       << looser_below * elements << " faces on this " << grid << " grid (this map: " << accepted.faces << " faces, "
+       << std::setprecision(4) << (elements > 0 ? double(accepted.faces) / elements : 0.0) << " per element)";
   deviation_rule << "every element's area / mean area within 1 +- max(" << limits.max_element_deviation << ", 8 x "
                  << limits.coarse_face_sd << " / sqrt(faces per element))";
   return {{"passed", problem.empty()},
           {"problem", problem},
+          // What the acceptance measured (on its grid, whatever --k the metrics use).
+          {"measured",
+           {{"flips", accepted.flips},
+            {"element_cv_" + grid, accepted.element_cv},
+            {"element_area_over_mean_min_" + grid, accepted.element_min},
+            {"element_area_over_mean_max_" + grid, accepted.element_max},
+            {"vertex_ln_area_abs_mean", std::isnan(vertex_mean) ? accepted.vertex_ln_area.mean : vertex_mean}}},
           {"limits",
            {{"flips", 0},
             {"element_cv_" + grid, cv},
@@ -83,7 +95,28 @@ std::string inserted_vertices_text(const MatrixXi& parents, const VectorXd& weig
   return text;
 }
 
+int InsertedVertexRecord::copies() const {
+  int n = 0;
+  for (Eigen::Index k = 0; k < parents.rows(); ++k) n += parents(k, 0) == parents(k, 1);
+  return n;
+}
+
+std::string inserted_vertices_description(const InsertedVertexRecord& record) {
+  const int copies = record.copies(), splits = static_cast<int>(record.parents.rows()) - copies;
+  std::string s;
+  if (copies > 0) s = std::to_string(copies) + (copies == 1 ? " copy" : " copies") + " of the vertices along the cut that opened the surface";
+  if (splits > 0)
+    s += (s.empty() ? "" : " and ") + std::to_string(splits) + (splits == 1 ? " vertex" : " vertices") +
+         " the flattening inserted (corner and ear splits)";
+  return s;
+}
+
 MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int count, const std::string& path) {
+  const InsertedVertexRecord record = parse_inserted_vertices(text, static_cast<int>(V.rows()), count, path);
+  return extend_to_inserted(V, record.parents, record.weight);  // the flattening's own rule
+}
+
+InsertedVertexRecord parse_inserted_vertices(const std::string& text, int num_input, int count, const std::string& path) {
   MatrixXi parents(count, 2);
   VectorXd weight(count);
   std::istringstream in(text);
@@ -94,7 +127,7 @@ MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int
     long long p0 = -1, p1 = -1;
     double w = NAN;
     std::string rest;
-    const Eigen::Index self = V.rows() + k;
+    const Eigen::Index self = num_input + k;
     if (!(fields >> p0 >> p1 >> w) || (fields >> rest) || k >= count || p0 < 0 || p1 < 0 || p0 >= self || p1 >= self ||
         !(w >= 0 && w <= 1))
       throw InputError(path + ": metadata " + kInsertedVerticesKey + " entry " + std::to_string(k + 1) + " ('" + item +
@@ -107,7 +140,7 @@ MatrixXd place_inserted_vertices(const MatrixXd& V, const std::string& text, int
   if (k != count)
     throw InputError(path + ": metadata " + kInsertedVerticesKey + " describes " + std::to_string(k) + " inserted vertices but the map has " +
                      std::to_string(count) + "; the file was changed after authalic wrote it");
-  return extend_to_inserted(V, parents, weight);  // the flattening's own rule
+  return {parents, weight};
 }
 
 nlohmann::json flow_json(const FlowReport& r, const FlowOptions& o) {

@@ -182,7 +182,15 @@ Volume read_nifti(const std::string& path, const VolumeReadOptions& options) {
   }
   // Orientation before data: no point loading an image we must refuse.
   Volume v;
-  if (nim->sform_code > 0) {
+  const std::string descrip(nim->descrip, strnlen(nim->descrip, sizeof(nim->descrip)));
+  if (nim->sform_code == NIFTI_XFORM_TEMPLATE_OTHER && descrip.find(kMapGridMarker) != std::string::npos) {
+    // An element image written by authalic: its own grid space, never a scanner's.
+    if (!options.allow_map_grid)
+      fail(path, "is an authalic element image (a grid on the cortical map, not a scanner space), so it has no position in the brain",
+           "give the scanner image (e.g. the PET), not an element image");
+    v.vox2ras = to_eigen(nim->sto_xyz);
+    v.orientation_source = "map grid";
+  } else if (nim->sform_code > 0) {
     v.vox2ras = to_eigen(nim->sto_xyz);
     v.orientation_source = "sform";
   } else if (nim->qform_code > 0) {
@@ -257,8 +265,8 @@ void write_nifti1(const std::string& path, const Volume& volume, const NiftiWrit
     nifti_dmat44 m;
     for (int r = 0; r < 4; ++r)
       for (int c = 0; c < 4; ++c) m.m[r][c] = volume.vox2ras(r, c);
-    nim->sform_code = options.map_grid ? NIFTI_XFORM_UNKNOWN : NIFTI_XFORM_ALIGNED_ANAT;
-    nim->qform_code = options.map_grid ? NIFTI_XFORM_UNKNOWN : NIFTI_XFORM_ALIGNED_ANAT;
+    nim->sform_code = options.map_grid ? NIFTI_XFORM_TEMPLATE_OTHER : NIFTI_XFORM_ALIGNED_ANAT;
+    nim->qform_code = options.map_grid ? NIFTI_XFORM_TEMPLATE_OTHER : NIFTI_XFORM_ALIGNED_ANAT;
     nim->intent_code = options.intent_code;
     std::snprintf(nim->intent_name, sizeof(nim->intent_name), "%s", options.intent_name.substr(0, 15).c_str());
     nim->sto_xyz = m;
@@ -282,7 +290,10 @@ void write_nifti1(const std::string& path, const Volume& volume, const NiftiWrit
     nim->xyz_units = NIFTI_UNITS_MM;
     nim->scl_slope = 1.0;
     nim->scl_inter = 0.0;
-    std::snprintf(nim->descrip, sizeof(nim->descrip), "%s", options.description.substr(0, 79).c_str());
+    std::string descrip = options.description.substr(0, 79);
+    if (options.map_grid && descrip.find(kMapGridMarker) == std::string::npos)  // the reader tells element images by it
+      descrip = (std::string(kMapGridMarker) + "; " + options.description).substr(0, 79);
+    std::snprintf(nim->descrip, sizeof(nim->descrip), "%s", descrip.c_str());
     nim->data = std::malloc(volume.data.size() * sizeof(float));
     if (!nim->data) throw std::runtime_error("out of memory");
     std::memcpy(nim->data, volume.data.data(), volume.data.size() * sizeof(float));

@@ -362,7 +362,9 @@ void write_per_vertex(const std::string& path, const MatrixXd& values, const Fun
   }
   const std::string name = detail::lower_filename(path);
   if (ends_with(name, ".gii") || ends_with(name, ".gii.gz")) {
-    const int intent = ends_with(name, ".shape.gii") || ends_with(name, ".shape.gii.gz") ? 2005 /*NIFTI_INTENT_SHAPE*/ : 0;
+    const int intent = options.intent != 0                                                   ? options.intent
+                       : ends_with(name, ".shape.gii") || ends_with(name, ".shape.gii.gz") ? 2005 /*NIFTI_INTENT_SHAPE*/
+                                                                                           : 0;
     detail::write_gifti_columns(path, values, options, intent, nullptr);
   } else if (ends_with(name, ".txt") || ends_with(name, ".csv")) {
     std::ostringstream ss;

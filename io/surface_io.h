@@ -106,6 +106,9 @@ struct FuncWriteOptions {
   std::vector<std::string> column_names;
   std::string anatomical_structure;
   std::map<std::string, std::string> metadata;  // written into the file's metadata
+  // NIFTI_INTENT_* of each GIFTI data array, e.g. 5 = NIFTI_INTENT_ZSCORE; 0 (none) gives
+  // NIFTI_INTENT_SHAPE for a .shape.gii. Labels are always NIFTI_INTENT_LABEL.
+  int intent = 0;
 };
 // GIFTI func/shape (.func.gii/.shape.gii): one float32 data array per column of `values`.
 // FreeSurfer curv format for any other extension (first column only).

@@ -30,9 +30,11 @@ struct Volume {
 struct VolumeReadOptions {
   int frame = -1;          // for 4D files: which frame (0-based); -1 = none chosen
   bool sum_frames = false; // for 4D files: sum all frames (e.g. a static image from dynamic frames)
-  // NIfTI with no orientation (sform and qform codes 0, as authalic's element images are written:
-  // a grid on the map, not in a scanner): accepted with NIfTI's method 1 (diagonal pixdim affine,
-  // orientation_source "pixdim") instead of refused. Never for a PET, whose position matters.
+  // authalic's element images (a grid on the map, not in a scanner; NiftiWriteOptions::map_grid):
+  // accepted with their own affine (orientation_source "map grid") instead of refused, and so are
+  // NIfTI files with no orientation (sform and qform codes 0, as element images were written
+  // before): NIfTI's method 1 (diagonal pixdim affine, orientation_source "pixdim"). Never for a
+  // PET, whose position matters.
   bool allow_map_grid = false;
 };
 
@@ -71,10 +73,16 @@ void write_mgh(const std::string& path, const Volume& volume);
 // Writes NIfTI-1 float32 (.nii or .nii.gz) with sform = qform = vox2ras (code 2: aligned). Atomic.
 void write_nifti(const std::string& path, const Volume& volume, const std::string& description = {});
 
+// The text in an element image's header descrip that marks it as a grid on the map (with sform
+// code NIFTI_XFORM_TEMPLATE_OTHER); read_volume refuses such an image unless allow_map_grid.
+inline constexpr const char* kMapGridMarker = "map grid";
 struct NiftiWriteOptions {
   std::string description;  // header descrip (the first 79 characters)
-  // A grid that lives on a map (element images), not in a scanner: sform and qform codes 0
-  // (unknown), so no viewer lays it over anatomy as if aligned; pixdim keeps the voxel sizes.
+  // A grid that lives on a map (element images), not in a scanner: sform and qform code 5
+  // (NIFTI_XFORM_TEMPLATE_OTHER: the element grid's own space, the same for every subject) with
+  // the volume's affine, so every tool puts voxel (i, j, k) at the same place (with codes 0,
+  // Workbench and nibabel fell back to different affines, x flipped in one); descrip carries
+  // kMapGridMarker (prepended when the description lacks it).
   bool map_grid = false;
   int intent_code = 0;      // NIFTI_INTENT_*, e.g. 5 = NIFTI_INTENT_ZSCORE
   std::string intent_name;  // the first 15 characters

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iterator>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "common/test_data.h"
@@ -264,6 +266,42 @@ TEST(FlattenCli, MeasureControlledMapRecordsThatTheElementCvIsNotChecked) {
   EXPECT_EQ(j.at("acceptance").at("passed"), true);
   EXPECT_TRUE(j.at("acceptance").at("limits").at("element_cv_32x32").is_null());
   EXPECT_GT(j.at("metrics").at("element_cv").get<double>(), 0.2);  // the anterior cortex gets a third of the area per unit
+}
+
+// With --k other than 32 the acceptance still measures on its own 32 x 32 grid, and the metrics
+// JSON records that CV beside the limit (QA 4 item 10: only the --k grid's CV was there), with the
+// rule's text saying where the coarse-mesh limit applies (it said "only on coarse meshes", yet it
+// applies up to 900 faces per element, native-resolution cortex included).
+TEST(FlattenCli, AcceptanceRecordsWhatItMeasuredOnItsGridWhateverK) {
+  const std::string src = AUTHALIC_SOURCE_DIR;
+  const std::string dir = authalic::test::temp_dir("flatten_k16");
+  const std::string white = src + "/sample_data/surf/lh.white";
+  std::string output;
+  ASSERT_EQ(run_command(authalic_binary() + " flatten " + white + " " + dir + "/o.surf.gii --label " + src +
+                            "/sample_data/label/lh.cortex.label --uv " + dir + "/uv.surf.gii --k 16 --metrics " + dir + "/m.json -q",
+                        &output),
+            0)
+      << output;
+  const auto j = read_json(dir + "/m.json");
+  EXPECT_EQ(j.at("metrics").at("element_grid"), nlohmann::json({16, 16}));
+  const auto& acceptance = j.at("acceptance");
+  EXPECT_EQ(acceptance.at("passed"), true);
+  ASSERT_EQ(run_command(authalic_binary() + " metrics " + white + " " + dir + "/uv.surf.gii --k 32 --json", &output), 0) << output;
+  const auto at32 = nlohmann::json::parse(output.substr(output.find('{')));
+  const double measured = acceptance.at("measured").at("element_cv_32x32").get<double>();
+  EXPECT_NEAR(measured, at32.at("element_cv").get<double>(), 1e-6);  // the uv file is float32
+  EXPECT_NE(measured, j.at("metrics").at("element_cv").get<double>());  // not the 16 x 16 CV
+  EXPECT_LE(measured, acceptance.at("limits").at("element_cv_32x32").get<double>());
+  EXPECT_EQ(acceptance.at("measured").at("flips"), 0);
+  EXPECT_DOUBLE_EQ(acceptance.at("measured").at("vertex_ln_area_abs_mean").get<double>(),
+                   j.at("metrics").at("vertex_ln_area_abs").at("mean").get<double>());
+  const int faces = j.at("metrics").at("faces").get<int>();
+  std::ostringstream per_element;
+  per_element << std::setprecision(4) << faces / 1024.0;
+  EXPECT_EQ(acceptance.at("limits").at("element_cv_rule").get<std::string>(),
+            "max(0.01, 3 x 0.1 / sqrt(faces per element)): above 0.01 whenever an element holds fewer than 900 faces, i.e. on meshes "
+            "of fewer than 921600 faces on this 32x32 grid (this map: " + std::to_string(faces) + " faces, " + per_element.str() +
+                " per element)");
 }
 
 TEST(FlattenCli, RefusesAClosedSurfaceWithoutARegionAndWritesNothing) {

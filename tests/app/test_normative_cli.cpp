@@ -126,7 +126,8 @@ TEST(NormativeCli, BuildMergeCompare) {
     EXPECT_TRUE(std::filesystem::exists(dir + "/cmp" + suffix)) << suffix;
   const VectorXd zv = io::read_per_vertex(dir + "/cmp_z.func.gii");
   // The z image as nibabel reads it (issue 15 item 8): NIFTI_INTENT_ZSCORE, no scanner or aligned
-  // space claimed (sform/qform codes 0), the element area in its description and voxel size.
+  // space claimed but the element grid's own (sform/qform code 5, template other; QA 4 item 7: codes
+  // 0 left tools to guess), the element area in its description and voxel size.
   if (test::run_command("/usr/bin/python3 -c 'import nibabel'") == 0) {
     std::string nib;
     ASSERT_EQ(test::run_command("/usr/bin/python3 -c \"import nibabel as nib, numpy as np; i = nib.load('" + dir +
@@ -140,11 +141,19 @@ TEST(NormativeCli, BuildMergeCompare) {
     double z11 = 0, area = 0;
     in >> intent >> sform >> qform >> z11 >> area;
     EXPECT_EQ(intent, 5) << nib;
-    EXPECT_EQ(sform, 0) << nib;
-    EXPECT_EQ(qform, 0) << nib;
+    EXPECT_EQ(sform, 5) << nib;
+    EXPECT_EQ(qform, 5) << nib;
     EXPECT_NEAR(zv(1), z11, 1e-5) << nib;  // element 5 = (row 1, col 1)
     EXPECT_NEAR(area, 50.0, 1e-3) << nib;   // the table's element area (mm^2)
     EXPECT_NE(nib.find("map grid, element 50 mm^2"), std::string::npos) << nib;
+    // The per-vertex z carries the same intent (QA 4 item 10: its data array said NONE).
+    std::string func;
+    ASSERT_EQ(test::run_command("/usr/bin/python3 -c \"import nibabel as nib; d = nib.load('" + dir +
+                                    "/cmp_z.func.gii').darrays[0]; print(d.intent, nib.nifti1.intent_codes.niistring[d.intent])\"",
+                                &func),
+              0)
+        << func;
+    EXPECT_EQ(func, "5 NIFTI_INTENT_ZSCORE\n");
   } else if (test::running_in_ci()) {
     FAIL() << "CI=true but /usr/bin/python3 with nibabel is missing";
   }

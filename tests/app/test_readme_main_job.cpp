@@ -26,6 +26,7 @@
 
 #include "common/test_data.h"
 #include "core/mesh.h"
+#include "io/surface_formats.h"
 #include "io/surface_io.h"
 
 namespace fs = std::filesystem;
@@ -162,6 +163,10 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   const int nv = authalic::io::read_surface((root / white[1].str()).string()).mesh.num_vertices();
   const authalic::VectorXd z = authalic::io::read_per_vertex((subject / (stem + "_hemi-L_zscore.func.gii")).string(), nv);
   EXPECT_LT(z.array().isNaN().select(0.0, z.array()).minCoeff(), -2.0) << "the planted region is hypometabolic";
+  // QA 4 item 10: the per-vertex z says it is a z-score, as the element z image does.
+  EXPECT_EQ(authalic::io::detail::read_gifti((subject / (stem + "_hemi-L_zscore.func.gii")).string()).column_intents,
+            std::vector<int>{5})
+      << "NIFTI_INTENT_ZSCORE";
   const authalic::VectorXd labels = authalic::io::read_per_vertex((subject / (stem + "_hemi-L_desc-elements_dseg.label.gii")).string(), nv);
   EXPECT_GT(labels.maxCoeff(), 1000.0);  // element ids + 1 up to K^2 = 1024
 
@@ -183,14 +188,17 @@ TEST(Readme, MainJobRunsVerbatimAndWritesTheReport) {
   }
   EXPECT_GE(files, 40);
   EXPECT_TRUE(fs::exists(subject / (stem + "_elements.tsv")));
-  // The rectangle part records where the hemispheres meet (issue 19: the seam is w_L, not x = 1).
+  // The rectangle part records where the hemispheres meet (issue 19: the seam is w_L, not x = 1),
+  // in the file's own units, mm (QA 4 item 6: it said w_L in rectangle units in this mm file).
   const auto rect_part = authalic::io::read_surface((subject / (stem + "_hemi-L_space-authalicrect_flat.surf.gii")).string());
-  const double seam = std::stod(rect_part.metadata.at("authalic_seam_x"));
-  EXPECT_GT(seam, 0.5);
-  EXPECT_LT(seam, 1.5);
-  // The left part is [0, w_L] x [0, 1] scaled by s, so its area is w_L s^2 and its width w_L s.
-  const double s = std::sqrt(authalic::face_areas(rect_part.mesh.V, rect_part.mesh.F).sum() / seam);
-  EXPECT_NEAR(rect_part.mesh.V.col(0).maxCoeff() / s, seam, 0.01 * seam) << "the left part spans [0, w_L]";
+  EXPECT_EQ(rect_part.metadata.count("authalic_seam_x"), 0u);
+  const double seam_mm = std::stod(rect_part.metadata.at("authalic_seam_x_mm"));
+  // The left part is [0, w_L] x [0, 1] scaled by s: its height is s, its width w_L s = the seam in mm.
+  const double s = rect_part.mesh.V.col(1).maxCoeff() - rect_part.mesh.V.col(1).minCoeff();
+  EXPECT_GT(seam_mm / s, 0.5);
+  EXPECT_LT(seam_mm / s, 1.5);
+  EXPECT_NEAR(rect_part.mesh.V.col(0).maxCoeff(), seam_mm, 1e-4 * s) << "the left part spans [0, w_L] x s mm";
+  EXPECT_NEAR(authalic::face_areas(rect_part.mesh.V, rect_part.mesh.F).sum(), seam_mm * s, 0.01 * seam_mm * s);
   EXPECT_TRUE(fs::exists(subject / (stem + "_log.txt")));
 
   // Issue 15 item 7: a Workbench spec per subject names the surfaces and the per-vertex files on

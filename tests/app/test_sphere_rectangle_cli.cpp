@@ -470,6 +470,62 @@ TEST(RectangleCli, TwoHemispheresTakeTheirCortexAsLabels) {
   const auto j = read_json(dir + "/m.json");
   EXPECT_EQ(j.at("metrics").at("flips"), 0);
   EXPECT_LE(j.at("metrics").at("element_cv").get<double>(), 0.01);
+  // Each file records where the parts meet in its own units (QA 4 item 6: the mm files said x = 1
+  // in rectangle units, the seam being at 187.78 mm): the maps w_L as authalic_seam_x, the --flat
+  // files w_L x (mm per unit) as authalic_seam_x_mm, which is where their parts end in mm. The
+  // right hemisphere enlarged 1.1 times, so that the seam is not at x = 1.
+  authalic::TriMesh big = authalic::io::read_surface(s + "surf/rh.white").mesh;
+  big.V *= 1.1;
+  const std::string rh_big = dir + "/rh.big.surf.gii";
+  authalic::io::write_surface(rh_big, big);
+  ASSERT_EQ(run_command(authalic_binary() + " rectangle " + dir + "/uneven --lh " + s + "surf/lh.white --rh " + rh_big + " --lh-cortex " +
+                            s + "label/lh.cortex.label --rh-cortex " + s + "label/rh.cortex.label --metrics " + dir +
+                            "/uneven.json --flat -q",
+                        &output),
+            0)
+      << output;
+  const double split = read_json(dir + "/uneven.json").at("split_x").get<double>();
+  EXPECT_NEAR(split, 2.0 / (1.0 + 1.21), 0.02) << "w_L = 2 A_L / (A_L + A_R)";
+  for (const char* part : {"lh", "rh"}) {
+    const auto map = authalic::io::read_surface(dir + "/uneven." + part + ".surf.gii");
+    const auto mm = authalic::io::read_surface(dir + "/uneven." + part + ".flat.surf.gii");
+    EXPECT_NEAR(std::stod(map.metadata.at("authalic_seam_x")), split, 1e-12) << part;
+    EXPECT_EQ(map.metadata.count("authalic_seam_x_mm"), 0u) << part;
+    EXPECT_EQ(mm.metadata.count("authalic_seam_x"), 0u) << part << ": no rectangle-unit seam in a file in mm";
+    const double scale = mm.mesh.V.col(1).maxCoeff() - mm.mesh.V.col(1).minCoeff();  // the part spans y in [0, 1] x scale
+    EXPECT_GT(scale, 100.0) << part << ": in mm";
+    const double seam_mm = std::stod(mm.metadata.at("authalic_seam_x_mm"));
+    EXPECT_NEAR(seam_mm, split * scale, 1e-6 * scale) << part;
+    EXPECT_NEAR(std::string(part) == "lh" ? mm.mesh.V.col(0).maxCoeff() : mm.mesh.V.col(0).minCoeff(), seam_mm, 1e-4 * scale) << part;
+  }
+  // `metrics --domain rectangle` of one part measures the part's cells, as `elements` does (QA 4
+  // item 3: it printed CV 1, min/mean 0, with no note), for the map and for its copy in mm.
+  for (const char* part : {"lh", "rh"}) {
+    const std::string surface = std::string(part) == "lh" ? s + "surf/lh.white" : rh_big, map = dir + "/uneven." + part + ".surf.gii";
+    authalic::io::write_per_vertex(dir + "/y.func.gii", authalic::io::read_surface(surface).mesh.V.col(1));
+    ASSERT_EQ(run_command(authalic_binary() + " elements " + surface + " " + map + " " + dir + "/y.func.gii " + dir + "/el_" + part +
+                              " --domain rectangle --json -q",
+                          &output),
+              0)
+        << output;
+    const double elements_cv = nlohmann::json::parse(output.substr(output.find('{'))).at("element_area_cv").get<double>();
+    EXPECT_LT(elements_cv, 0.01) << part;
+    const std::string side = std::string(part) == "lh" ? "left" : "right";
+    const int columns = std::string(part) == "lh" ? static_cast<int>(std::floor(split * 32)) : 64 - static_cast<int>(std::ceil(split * 32));
+    for (const std::string& measured : {map, dir + "/uneven." + part + ".flat.surf.gii"}) {
+      ASSERT_EQ(run_command(authalic_binary() + " metrics " + surface + " " + measured + " --domain rectangle --json", &output), 0) << output;
+      const auto m = nlohmann::json::parse(output.substr(output.find('{')));
+      EXPECT_NEAR(m.at("element_cv").get<double>(), elements_cv, 1e-6) << measured;  // the mm copy: float32 mm, scaled back
+      EXPECT_GT(m.at("element_min_over_mean").get<double>(), 0.9) << measured;
+      EXPECT_LT(m.at("element_max_over_mean").get<double>(), 1.1) << measured;
+      EXPECT_EQ(m.at("rectangle_part").at("hemisphere"), side) << measured;
+      EXPECT_NEAR(m.at("rectangle_part").at("seam_x").get<double>(), split, 1e-6) << measured;
+      const auto& cols = m.at("rectangle_part").at("element_columns");
+      EXPECT_EQ(cols.at(1).get<int>() - cols.at(0).get<int>(), columns) << measured;
+    }
+    ASSERT_EQ(run_command(authalic_binary() + " metrics " + surface + " " + map + " --domain rectangle", &output), 0) << output;
+    EXPECT_NE(output.find("note: the map is the " + side + " hemisphere's part of a two-hemisphere rectangle"), std::string::npos) << output;
+  }
   // The same region as a face set under a name that says nothing of it: the same map.
   const auto white = authalic::io::read_surface(s + "surf/lh.white");
   const auto left = authalic::io::read_surface(dir + "/brain.lh.surf.gii");
