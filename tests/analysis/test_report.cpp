@@ -18,6 +18,16 @@
 
 namespace {
 
+// The DOM of an HTML report after headless Chromium ran its scripts (software WebGL, 15 s of
+// virtual time); returns Chromium's exit status.
+int viewer_dom(const std::string& html, const std::string& profile, std::string* dom) {
+  return authalic::test::run_command("timeout 120 chromium --headless --no-sandbox --disable-gpu --use-gl=angle "
+                                     "--use-angle=swiftshader --enable-unsafe-swiftshader --disable-background-networking "
+                                     "--user-data-dir=" + profile + " --virtual-time-budget=15000 --dump-dom file://" + html +
+                                         " 2>/dev/null",
+                                     dom);
+}
+
 namespace an = authalic::analysis;
 namespace io = authalic::io;
 using authalic::MatrixXd;
@@ -417,12 +427,7 @@ TEST(ReportViewer, ChromiumDrawsTheInteractiveViewOffline) {
   const std::string dir = authalic::test::temp_dir("report_viewer");
   an::write_report(dir + "/report.html", example_report(true));
   std::string dom;
-  ASSERT_EQ(authalic::test::run_command("timeout 120 chromium --headless --no-sandbox --disable-gpu --use-gl=angle "
-                                        "--use-angle=swiftshader --enable-unsafe-swiftshader --disable-background-networking "
-                                        "--user-data-dir=" + dir + "/profile --virtual-time-budget=15000 --dump-dom file://" +
-                                            dir + "/report.html 2>/dev/null",
-                                        &dom),
-            0);
+  ASSERT_EQ(viewer_dom(dir + "/report.html", dir + "/profile", &dom), 0);
   const std::size_t at = dom.find("data-drawn=\"");
   ASSERT_NE(at, std::string::npos) << dom.substr(dom.find("nv-status"), 300);
   EXPECT_GT(std::stol(dom.substr(at + 12)), 1000) << "the canvas is blank";
@@ -456,12 +461,7 @@ TEST(ReportViewer, HypometabolismHasThePicturesColours) {
   const std::string dir = authalic::test::temp_dir("report_viewer_colours");
   an::write_report(dir + "/report.html", d);
   std::string dom;
-  ASSERT_EQ(authalic::test::run_command("timeout 120 chromium --headless --no-sandbox --disable-gpu --use-gl=angle "
-                                        "--use-angle=swiftshader --enable-unsafe-swiftshader --disable-background-networking "
-                                        "--user-data-dir=" + dir + "/profile --virtual-time-budget=15000 --dump-dom file://" +
-                                            dir + "/report.html 2>/dev/null",
-                                        &dom),
-            0);
+  ASSERT_EQ(viewer_dom(dir + "/report.html", dir + "/profile", &dom), 0);
   const std::size_t at = dom.find("data-overlay-colour=\"");
   ASSERT_NE(at, std::string::npos) << dom.substr(dom.find("nv-status"), 300);
   int r = 0, g = 0, b = 0;

@@ -11,19 +11,13 @@
 namespace authalic {
 namespace {
 
-std::string bin() { return test::shell_quote(test::authalic_binary()); }
 
-int lines_of(const std::string& s) {
-  int n = 0;
-  for (char c : s) n += c == '\n';
-  return n;
-}
 
 void expect_usage_error(const std::string& args, const std::string& expected) {
   std::string out;
-  EXPECT_EQ(test::run_command(bin() + " " + args, &out), 2) << args << "\n" << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " " + args, &out), 2) << args << "\n" << out;
   EXPECT_EQ(out, "authalic: error: " + expected + "\n") << args;
-  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_EQ(test::count_lines(out), 1) << out;
 }
 
 TEST(CliUsage, MistypedSubcommandsAndOptionsAreNamed) {
@@ -36,23 +30,23 @@ TEST(CliUsage, MistypedSubcommandsAndOptionsAreNamed) {
   expect_usage_error("normative compare --thresold=3 a b c",
                      "authalic normative compare: unknown option --thresold; did you mean --threshold? (see authalic normative compare --help)");
   std::string out;
-  EXPECT_EQ(test::run_command(bin() + " flatten --bogus --json", &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " flatten --bogus --json", &out), 2) << out;
   const nlohmann::json j = nlohmann::json::parse(out.substr(out.find('{')));
   EXPECT_EQ(j["error"], "authalic flatten: unknown option --bogus (see authalic flatten --help)");
   EXPECT_EQ(j["kind"], "usage");
   // Correct lines are not affected: --help, --version, and a known option with a negative value.
-  EXPECT_EQ(test::run_command(bin() + " --version", &out), 0) << out;
-  EXPECT_EQ(test::run_command(bin() + " normative compare --help", &out), 0) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " --version", &out), 0) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " normative compare --help", &out), 0) << out;
   EXPECT_NE(out.find("--threshold"), std::string::npos) << out;
 }
 
 TEST(CliUsage, RangeErrorsPrintTheBoundsAsWritten) {
   std::string out;
-  EXPECT_EQ(test::run_command(bin() + " sample --frame -1 a b c", &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " sample --frame -1 a b c", &out), 2) << out;
   EXPECT_NE(out.find("--frame: '-1' is not a number from 0 to 100000"), std::string::npos) << out;
-  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_EQ(test::count_lines(out), 1) << out;
   EXPECT_LT(out.size(), 200u) << out;
-  EXPECT_EQ(test::run_command(bin() + " group --jobs 0 " + std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/cohort.csv out", &out), 2)
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group --jobs 0 " + std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/cohort.csv out", &out), 2)
       << out;
   EXPECT_NE(out.find("'0' is not a number from 1 to 256"), std::string::npos) << out;
   EXPECT_LT(out.size(), 200u) << out;

@@ -17,21 +17,14 @@ namespace authalic {
 namespace {
 
 std::string q(const std::string& s) { return test::shell_quote(s); }
-std::string bin() { return q(test::authalic_binary()); }
-std::string sample(const std::string& relative) { return std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/" + relative; }
 
-int lines_of(const std::string& s) {
-  int n = 0;
-  for (char c : s) n += c == '\n';
-  return n;
-}
 
 // One cohort row of sample_data's surfaces: "<id>,<role>,<age>,<pet>,<surfaces and labels>[,extra]".
 std::string row(const std::string& id, const std::string& role, const std::string& age, const std::string& pet,
                 const std::string& extra = "") {
-  return id + "," + role + "," + age + "," + pet + "," + sample("surf/lh.white") + "," + sample("surf/lh.pial") + "," +
-         sample("surf/rh.white") + "," + sample("surf/rh.pial") + "," + sample("label/lh.cortex.label") + "," +
-         sample("label/rh.cortex.label") + extra;
+  return id + "," + role + "," + age + "," + pet + "," + test::sample_data("surf/lh.white") + "," + test::sample_data("surf/lh.pial") + "," +
+         test::sample_data("surf/rh.white") + "," + test::sample_data("surf/rh.pial") + "," + test::sample_data("label/lh.cortex.label") + "," +
+         test::sample_data("label/rh.cortex.label") + extra;
 }
 
 std::string write_cohort(const std::string& path, const std::vector<std::string>& rows, const std::string& extra_header = "") {
@@ -41,7 +34,7 @@ std::string write_cohort(const std::string& path, const std::vector<std::string>
   return path;
 }
 
-std::string pet_of(const std::string& id) { return sample("sub-" + id + "/sub-" + id + "_pet.nii.gz"); }
+std::string pet_of(const std::string& id) { return test::sample_data("sub-" + id + "/sub-" + id + "_pet.nii.gz"); }
 
 nlohmann::json json_of(const std::string& out) { return nlohmann::json::parse(out.substr(out.find('{'))); }
 
@@ -50,9 +43,9 @@ std::string fake_atlas(const std::string& dir) {
   fs::create_directories(dir + "/surf");
   fs::create_directories(dir + "/label");
   for (const std::string h : {"lh", "rh"}) {
-    fs::copy_file(sample("surf/" + h + ".white"), dir + "/surf/" + h + ".white");
-    fs::copy_file(sample("surf/" + h + ".white"), dir + "/surf/" + h + ".sphere");
-    fs::copy_file(sample("label/" + h + ".cortex.label"), dir + "/label/" + h + ".cortex.label");
+    fs::copy_file(test::sample_data("surf/" + h + ".white"), dir + "/surf/" + h + ".white");
+    fs::copy_file(test::sample_data("surf/" + h + ".white"), dir + "/surf/" + h + ".sphere");
+    fs::copy_file(test::sample_data("label/" + h + ".cortex.label"), dir + "/label/" + h + ".cortex.label");
   }
   return dir;
 }
@@ -62,7 +55,7 @@ std::string fake_atlas(const std::string& dir) {
 TEST(GroupCli, MixedCorrespondenceModesAreRefusedBeforeAnyMap) {
   const std::string dir = test::temp_dir("group-modes");
   const std::string atlas = fake_atlas(dir + "/atlas");
-  const std::string reg = "," + sample("surf/lh.white") + "," + sample("surf/rh.white");  // any existing files
+  const std::string reg = "," + test::sample_data("surf/lh.white") + "," + test::sample_data("surf/rh.white");  // any existing files
   const std::string cohort = write_cohort(dir + "/mixed.csv",
                                           {row("control01", "control", "71", pet_of("control01"), reg),
                                            row("control02", "control", "72", pet_of("control02"), ",,"),
@@ -70,27 +63,27 @@ TEST(GroupCli, MixedCorrespondenceModesAreRefusedBeforeAnyMap) {
                                            row("patient01", "patient", "68", pet_of("patient01"), reg)},
                                           ",lh_sphere_reg,rh_sphere_reg");
   std::string out;
-  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/g") + " --atlas " + q(atlas), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort) + " " + q(dir + "/g") + " --atlas " + q(atlas), &out), 2) << out;
   EXPECT_NE(out.find("mixed.csv:3: subject 'control02' would be mapped in registration to the atlas map without sphere.reg"),
             std::string::npos)
       << out;
   EXPECT_NE(out.find("but control 'control01' (line 2) in atlas correspondence through sphere.reg"), std::string::npos) << out;
   EXPECT_NE(out.find("give every row both lh_sphere_reg and rh_sphere_reg, or none"), std::string::npos) << out;
-  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_EQ(test::count_lines(out), 1) << out;
   EXPECT_FALSE(fs::exists(dir + "/g")) << "refused before any folder or map";
 
   // One sphere.reg alone would map both hemispheres by registration without saying so.
   const std::string half = write_cohort(dir + "/half.csv",
                                         {row("control01", "control", "71", pet_of("control01"), reg),
-                                         row("control02", "control", "72", pet_of("control02"), "," + sample("surf/lh.white") + ","),
+                                         row("control02", "control", "72", pet_of("control02"), "," + test::sample_data("surf/lh.white") + ","),
                                          row("control03", "control", "73", pet_of("control03"), reg)},
                                         ",lh_sphere_reg,rh_sphere_reg");
-  EXPECT_EQ(test::run_command(bin() + " group " + q(half) + " " + q(dir + "/h") + " --atlas " + q(atlas), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(half) + " " + q(dir + "/h") + " --atlas " + q(atlas), &out), 2) << out;
   EXPECT_NE(out.find("half.csv:3: subject 'control02' has lh_sphere_reg but no rh_sphere_reg; give both"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/h"));
 
   // Without --atlas every row is per-subject: the sphere_reg columns do not make modes differ.
-  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/c") + " --check", &out), 0) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort) + " " + q(dir + "/c") + " --check", &out), 0) << out;
   EXPECT_FALSE(fs::exists(dir + "/c")) << "--check writes nothing";
 }
 
@@ -100,20 +93,20 @@ TEST(GroupCli, GivenReferenceIsCheckedCompletelyBeforeAnyMap) {
   const std::string dir = test::temp_dir("group-given-ref");
   const std::string cohort = write_cohort(dir + "/cohort.csv", {row("control01", "control", "71", pet_of("control01")),
                                                                 row("patient01", "patient", "68", pet_of("patient01"))});
-  nlohmann::json ref = nlohmann::json::parse(std::ifstream(sample("normative.json")));
+  nlohmann::json ref = nlohmann::json::parse(std::ifstream(test::sample_data("normative.json")));
   ref["partial"] = true;
   std::ofstream(dir + "/partial.json") << ref.dump();
   ref["partial"] = false;
   ref["correspondence"] = "atlas 0123456789abcdef+0123456789abcdef";
   std::ofstream(dir + "/atlas.json") << ref.dump();
   std::string out;
-  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/p") + " --normative " + q(dir + "/partial.json"), &out), 2)
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort) + " " + q(dir + "/p") + " --normative " + q(dir + "/partial.json"), &out), 2)
       << out;
   EXPECT_NE(out.find(dir + "/partial.json: is a partial reference (20 control(s), from `normative build --partial`)"), std::string::npos)
       << out;
-  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_EQ(test::count_lines(out), 1) << out;
   EXPECT_FALSE(fs::exists(dir + "/p")) << "refused before any folder or map";
-  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/a") + " --normative " + q(dir + "/atlas.json"), &out), 2)
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort) + " " + q(dir + "/a") + " --normative " + q(dir + "/atlas.json"), &out), 2)
       << out;
   EXPECT_NE(out.find("cohort.csv:3: patient 'patient01' would be mapped in per-subject correspondence (no --atlas) but the "
                      "reference " + dir + "/atlas.json was built in atlas correspondence through sphere.reg"),
@@ -140,7 +133,7 @@ TEST(GroupCli, PatientsAreNotRunOrListedOkWithoutAReference) {
                                                                 row("control04", "control", "74", bad_pet),
                                                                 row("patient01", "patient", "68", pet_of("patient01"))});
   std::string out;
-  ASSERT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/g") + " --no-rectangle --json --threads 2", &out), 3)
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort) + " " + q(dir + "/g") + " --no-rectangle --json --threads 2", &out), 3)
       << out;
   const nlohmann::json j = json_of(out);
   EXPECT_NE(j["reference_exit_code"], 0) << j.dump(2);
@@ -175,7 +168,7 @@ TEST(GroupCli, ControlsUsedCountsTheGivenReferencesControls) {
   const std::string dir = test::temp_dir("group-controls-used");
   const std::string cohort = write_cohort(dir + "/cohort.csv", {row("patient01", "patient", "68.2", pet_of("patient01"))});
   std::string out;
-  ASSERT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/g") + " --normative " + q(sample("normative.json")) +
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort) + " " + q(dir + "/g") + " --normative " + q(test::sample_data("normative.json")) +
                                   " --no-rectangle --json --threads 2",
                               &out),
             0)
@@ -183,7 +176,7 @@ TEST(GroupCli, ControlsUsedCountsTheGivenReferencesControls) {
   const nlohmann::json j = json_of(out);
   EXPECT_EQ(j["controls_used"], 20) << j.dump(2);
   EXPECT_EQ(j["controls_succeeded"], 0) << j.dump(2);
-  EXPECT_EQ(j["reference"], sample("normative.json"));
+  EXPECT_EQ(j["reference"], test::sample_data("normative.json"));
   EXPECT_EQ(j["subjects"][0]["status"], "ok");
   EXPECT_EQ(j["not_run"], 0);
 }

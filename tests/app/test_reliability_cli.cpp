@@ -32,14 +32,7 @@ namespace authalic {
 namespace {
 
 std::string q(const std::string& s) { return test::shell_quote(s); }
-std::string bin() { return q(test::authalic_binary()); }
-std::string sample(const std::string& relative) { return std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/" + relative; }
 
-int lines_of(const std::string& s) {
-  int n = 0;
-  for (char c : s) n += c == '\n';
-  return n;
-}
 
 // Runs `command`, expects exit 2 with `expected` in its one-line message, and every file in
 // `kept` byte-identical afterwards.
@@ -49,7 +42,7 @@ void expect_refused(const std::string& command, const std::string& expected, con
   std::string out;
   EXPECT_EQ(test::run_command(command, &out), 2) << command << "\n" << out;
   EXPECT_NE(out.find(expected), std::string::npos) << command << "\n" << out;
-  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_EQ(test::count_lines(out), 1) << out;
   for (std::size_t i = 0; i < kept.size(); ++i) EXPECT_EQ(io::sha256_file(kept[i]), before[i]) << kept[i] << " changed";
 }
 
@@ -59,10 +52,10 @@ std::string write_patch(const std::string& dir) {
   return path;
 }
 
-std::string run_args(const std::string& out, const std::string& pet = sample("sub-patient01/sub-patient01_pet.nii.gz")) {
-  return bin() + " run --id patient01 --lh-white " + q(sample("surf/lh.white")) + " --lh-pial " + q(sample("surf/lh.pial")) +
-         " --rh-white " + q(sample("surf/rh.white")) + " --rh-pial " + q(sample("surf/rh.pial")) + " --lh-cortex " +
-         q(sample("label/lh.cortex.label")) + " --rh-cortex " + q(sample("label/rh.cortex.label")) + " --pet " + q(pet) +
+std::string run_args(const std::string& out, const std::string& pet = test::sample_data("sub-patient01/sub-patient01_pet.nii.gz")) {
+  return test::quoted_binary() + " run --id patient01 --lh-white " + q(test::sample_data("surf/lh.white")) + " --lh-pial " + q(test::sample_data("surf/lh.pial")) +
+         " --rh-white " + q(test::sample_data("surf/rh.white")) + " --rh-pial " + q(test::sample_data("surf/rh.pial")) + " --lh-cortex " +
+         q(test::sample_data("label/lh.cortex.label")) + " --rh-cortex " + q(test::sample_data("label/rh.cortex.label")) + " --pet " + q(pet) +
          " --out " + q(out) + " --quiet";
 }
 
@@ -73,20 +66,20 @@ TEST(ReliabilityCli, OutputThatIsNotARegularFileIsRefusedAndLeftAsItIs) {
   const std::string patch = write_patch(dir);
   const std::string fifo = dir + "/pipe.surf.gii";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
-  expect_refused(bin() + " flatten " + q(patch) + " " + q(fifo), "a FIFO (named pipe), not a regular file", {patch});
+  expect_refused(test::quoted_binary() + " flatten " + q(patch) + " " + q(fifo), "a FIFO (named pipe), not a regular file", {patch});
   struct stat st {};
   ASSERT_EQ(::lstat(fifo.c_str(), &st), 0);
   EXPECT_TRUE(S_ISFIFO(st.st_mode)) << "the FIFO was replaced";
   // A device node (a private copy of /dev/null's numbers, made only when we may: as root).
   const std::string dev = dir + "/null.surf.gii";
   if (::mknod(dev.c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0) {
-    expect_refused(bin() + " flatten " + q(patch) + " " + q(dev), "a character device", {patch});
+    expect_refused(test::quoted_binary() + " flatten " + q(patch) + " " + q(dev), "a character device", {patch});
     ASSERT_EQ(::lstat(dev.c_str(), &st), 0);
     EXPECT_TRUE(S_ISCHR(st.st_mode)) << "the device node was replaced";
   }
   // A folder, and a missing folder: refused before any computing.
-  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir), "is a folder", {patch});
-  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/no/such/out.surf.gii"), "does not exist; create it first", {patch});
+  expect_refused(test::quoted_binary() + " flatten " + q(patch) + " " + q(dir), "is a folder", {patch});
+  expect_refused(test::quoted_binary() + " flatten " + q(patch) + " " + q(dir + "/no/such/out.surf.gii"), "does not exist; create it first", {patch});
 }
 
 TEST(ReliabilityCli, SymlinkOutputIsWrittenThroughAndADanglingOneRefused) {
@@ -96,12 +89,12 @@ TEST(ReliabilityCli, SymlinkOutputIsWrittenThroughAndADanglingOneRefused) {
   { std::ofstream(target) << "old"; }
   fs::create_symlink(target, link);
   std::string out;
-  ASSERT_EQ(test::run_command(bin() + " flatten " + q(patch) + " " + q(link) + " --quiet", &out), 0) << out;
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " flatten " + q(patch) + " " + q(link) + " --quiet", &out), 0) << out;
   EXPECT_TRUE(fs::is_symlink(link)) << "the link was replaced by a file";
   EXPECT_GT(fs::file_size(target), 100u) << "the link's target did not get the map";
   EXPECT_GE(io::read_surface(link).mesh.num_vertices(), io::read_surface(patch).mesh.num_vertices());
   fs::create_symlink(dir + "/missing.surf.gii", dir + "/dangling.surf.gii");
-  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/dangling.surf.gii"), "symlink to a missing file", {patch});
+  expect_refused(test::quoted_binary() + " flatten " + q(patch) + " " + q(dir + "/dangling.surf.gii"), "symlink to a missing file", {patch});
 }
 
 analysis::ElementTable control(const std::string& id, double value) {
@@ -135,22 +128,22 @@ TEST(ReliabilityCli, EveryCommandRefusesToWriteOverItsInput) {
   const std::string hard = dir + "/hard.surf.gii";
   fs::create_hard_link(patch, hard);
   const std::string same = "is also an input";
-  expect_refused(bin() + " flatten " + q(patch) + " " + q(patch), same, {patch});
-  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/o.surf.gii") + " --uv " + q(patch), same, {patch});
-  expect_refused(bin() + " flatten " + q(patch) + " " + q(hard), same, {patch});  // a hard link: same inode
-  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/../" + fs::path(dir).filename().string() + "/patch.surf.gii"), same, {patch});
-  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/o.surf.gii") + " --uv " + q(dir + "/o.surf.gii"),
+  expect_refused(test::quoted_binary() + " flatten " + q(patch) + " " + q(patch), same, {patch});
+  expect_refused(test::quoted_binary() + " flatten " + q(patch) + " " + q(dir + "/o.surf.gii") + " --uv " + q(patch), same, {patch});
+  expect_refused(test::quoted_binary() + " flatten " + q(patch) + " " + q(hard), same, {patch});  // a hard link: same inode
+  expect_refused(test::quoted_binary() + " flatten " + q(patch) + " " + q(dir + "/../" + fs::path(dir).filename().string() + "/patch.surf.gii"), same, {patch});
+  expect_refused(test::quoted_binary() + " flatten " + q(patch) + " " + q(dir + "/o.surf.gii") + " --uv " + q(dir + "/o.surf.gii"),
                  "is given twice as an output", {patch});
-  expect_refused(bin() + " subdivide " + q(patch) + " " + q(patch), same, {patch});
-  expect_refused(bin() + " sphere " + q(sphere) + " " + q(sphere), same, {sphere});
-  expect_refused(bin() + " render " + q(patch) + " " + q(patch), same, {patch});
+  expect_refused(test::quoted_binary() + " subdivide " + q(patch) + " " + q(patch), same, {patch});
+  expect_refused(test::quoted_binary() + " sphere " + q(sphere) + " " + q(sphere), same, {sphere});
+  expect_refused(test::quoted_binary() + " render " + q(patch) + " " + q(patch), same, {patch});
   const std::string pet = dir + "/pet.nii.gz";
-  fs::copy_file(sample("sub-patient01/sub-patient01_pet.nii.gz"), pet);
-  expect_refused(bin() + " sample " + q(pet) + " " + q(sample("surf/lh.pial")) + " " + q(pet), same, {pet});
+  fs::copy_file(test::sample_data("sub-patient01/sub-patient01_pet.nii.gz"), pet);
+  expect_refused(test::quoted_binary() + " sample " + q(pet) + " " + q(test::sample_data("surf/lh.pial")) + " " + q(pet), same, {pet});
   // elements: PREFIX.tsv would be the values file.
   const std::string values = dir + "/v.tsv";
   { std::ofstream(values) << "1\n"; }
-  expect_refused(bin() + " elements " + q(patch) + " " + q(patch) + " " + q(values) + " " + q(dir + "/v"), same, {values});
+  expect_refused(test::quoted_binary() + " elements " + q(patch) + " " + q(patch) + " " + q(values) + " " + q(dir + "/v"), same, {values});
   // normative build T1 T1 T2: the first control's table as the output (and its sidecar).
   std::vector<std::string> tables;
   for (int s = 0; s < 3; ++s) {
@@ -159,15 +152,15 @@ TEST(ReliabilityCli, EveryCommandRefusesToWriteOverItsInput) {
   }
   const std::string& t1 = tables[0];
   const std::string t1_sidecar = analysis::element_sidecar_path(t1);
-  expect_refused(bin() + " normative build " + q(t1) + " " + q(t1) + " " + q(tables[1]) + " " + q(tables[2]), same, {t1, t1_sidecar});
-  expect_refused(bin() + " normative build " + q(t1_sidecar) + " " + q(t1) + " " + q(tables[1]) + " " + q(tables[2]), same, {t1, t1_sidecar});
+  expect_refused(test::quoted_binary() + " normative build " + q(t1) + " " + q(t1) + " " + q(tables[1]) + " " + q(tables[2]), same, {t1, t1_sidecar});
+  expect_refused(test::quoted_binary() + " normative build " + q(t1_sidecar) + " " + q(t1) + " " + q(tables[1]) + " " + q(tables[2]), same, {t1, t1_sidecar});
   // compare REF PATIENT PREFIX with PREFIX.json = REF.
   const std::string ref = dir + "/ref.json";
   std::string out;
-  ASSERT_EQ(test::run_command(bin() + " normative build " + q(ref) + " " + q(tables[0]) + " " + q(tables[1]) + " " + q(tables[2]) + " --quiet", &out), 0) << out;
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " normative build " + q(ref) + " " + q(tables[0]) + " " + q(tables[1]) + " " + q(tables[2]) + " --quiet", &out), 0) << out;
   const std::string patient = dir + "/p_elements.csv";
   analysis::write_element_table(patient, control("p", 0.8));
-  expect_refused(bin() + " normative compare " + q(ref) + " " + q(patient) + " " + q(dir + "/ref"), same, {ref, patient});
+  expect_refused(test::quoted_binary() + " normative compare " + q(ref) + " " + q(patient) + " " + q(dir + "/ref"), same, {ref, patient});
 }
 
 TEST(ReliabilityCli, RunRefusesInputsInsideTheFolderForceWouldReplace) {
@@ -175,7 +168,7 @@ TEST(ReliabilityCli, RunRefusesInputsInsideTheFolderForceWouldReplace) {
   const std::string subject = dir + "/out/sub-patient01";
   fs::create_directories(subject);
   const std::string pet = subject + "/pet.nii.gz";
-  fs::copy_file(sample("sub-patient01/sub-patient01_pet.nii.gz"), pet);
+  fs::copy_file(test::sample_data("sub-patient01/sub-patient01_pet.nii.gz"), pet);
   expect_refused(run_args(dir + "/out", pet) + " --force", "lies inside " + subject, {pet});
   EXPECT_TRUE(fs::exists(pet));
 }
@@ -215,14 +208,14 @@ TEST(ReliabilityCli, ASecondRunOnTheSameSubjectFolderIsRefusedWhileTheFirstRuns)
 TEST(ReliabilityCli, NumericOptionsOutsideTheirRangeAreRefused) {
   const std::string dir = test::temp_dir("rel-numbers");
   const std::string patch = write_patch(dir);
-  const std::string pet = sample("sub-patient01/sub-patient01_pet.nii.gz"), pial = sample("surf/lh.pial");
+  const std::string pet = test::sample_data("sub-patient01/sub-patient01_pet.nii.gz"), pial = test::sample_data("surf/lh.pial");
   std::string out;
   for (const std::string step : {"1e-9", "1e-6", "0", "-1", "nan"}) {
-    EXPECT_EQ(test::run_command(bin() + " sample " + q(pet) + " " + q(pial) + " " + q(dir + "/s.func.gii") + " --step " + step, &out), 2)
+    EXPECT_EQ(test::run_command(test::quoted_binary() + " sample " + q(pet) + " " + q(pial) + " " + q(dir + "/s.func.gii") + " --step " + step, &out), 2)
         << step << ": " << out;
     EXPECT_FALSE(fs::exists(dir + "/s.func.gii"));
   }
-  EXPECT_EQ(test::run_command(bin() + " flatten " + q(patch) + " " + q(dir + "/o.surf.gii") + " --threads 100000", &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " flatten " + q(patch) + " " + q(dir + "/o.surf.gii") + " --threads 100000", &out), 2) << out;
   EXPECT_NE(out.find("--threads"), std::string::npos) << out;
   for (const std::string age : {"7O", "nan", "-inf", "-5", "200"}) {
     EXPECT_EQ(test::run_command(run_args(dir + "/run") + " --age " + age, &out), 2) << age << ": " << out;
@@ -238,21 +231,21 @@ TEST(ReliabilityCli, SmallCommandsDoWhatTheirHelpSays) {
   const std::string dir = test::temp_dir("rel-small-commands");
   const std::string patch = write_patch(dir);
   std::string out;
-  ASSERT_EQ(test::run_command(bin() + " subdivide " + q(patch) + " " + q(dir + "/fine.surf.gii") + " --json", &out), 0) << out;
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " subdivide " + q(patch) + " " + q(dir + "/fine.surf.gii") + " --json", &out), 0) << out;
   ASSERT_NE(out.find('{'), std::string::npos) << out;
   const auto sub = nlohmann::json::parse(out.substr(out.find('{')));
   EXPECT_EQ(sub.at("vertices"), io::read_surface(dir + "/fine.surf.gii").mesh.num_vertices());
-  ASSERT_EQ(test::run_command(bin() + " flatten " + q(patch) + " " + q(dir + "/flat.surf.gii") + " --uv " + q(dir + "/uv.surf.gii") +
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " flatten " + q(patch) + " " + q(dir + "/flat.surf.gii") + " --uv " + q(dir + "/uv.surf.gii") +
                                   " --k 8 -q",
                               &out),
             0)
       << out;
-  ASSERT_EQ(test::run_command(bin() + " render " + q(dir + "/r.png") + " " + q(dir + "/uv.surf.gii") + " --json", &out), 0) << out;
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " render " + q(dir + "/r.png") + " " + q(dir + "/uv.surf.gii") + " --json", &out), 0) << out;
   ASSERT_NE(out.find('{'), std::string::npos) << out;
   EXPECT_EQ(nlohmann::json::parse(out.substr(out.find('{'))).at("output"), dir + "/r.png");
-  expect_refused(bin() + " render " + q(dir + "/r2.png") + " " + q(dir + "/uv.surf.gii") + " --range 2 -2", "--range: LO must be below HI", {});
+  expect_refused(test::quoted_binary() + " render " + q(dir + "/r2.png") + " " + q(dir + "/uv.surf.gii") + " --range 2 -2", "--range: LO must be below HI", {});
   // --json: a failure is a JSON object on stdout too (stdout was empty), usage errors included.
-  EXPECT_EQ(test::run_command(bin() + " render " + q(dir + "/r2.png") + " " + q(dir + "/uv.surf.gii") + " --range 2 -2 --json", &out), 2);
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " render " + q(dir + "/r2.png") + " " + q(dir + "/uv.surf.gii") + " --range 2 -2 --json", &out), 2);
   ASSERT_NE(out.find('{'), std::string::npos) << out;
   const auto failed = nlohmann::json::parse(out.substr(out.find('{')));
   EXPECT_EQ(failed.at("exit_code"), 2);
@@ -260,30 +253,30 @@ TEST(ReliabilityCli, SmallCommandsDoWhatTheirHelpSays) {
   EXPECT_NE(failed.at("error").get<std::string>().find("--range: LO must be below HI"), std::string::npos) << out;
   // A map output in another format than GIFTI would drop the record of the appended vertices
   // (`rectangle --surface out/r` wrote a FreeSurfer binary, and `metrics` then gave CV 0.0149 for 0.0096).
-  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/flat_noext"), "OUT " + dir + "/flat_noext: a map is written as GIFTI", {});
-  expect_refused(bin() + " flatten " + q(patch) + " " + q(dir + "/f.surf.gii") + " --uv " + q(dir + "/uv.vtk"), "--uv " + dir + "/uv.vtk: a map is written as GIFTI", {});
+  expect_refused(test::quoted_binary() + " flatten " + q(patch) + " " + q(dir + "/flat_noext"), "OUT " + dir + "/flat_noext: a map is written as GIFTI", {});
+  expect_refused(test::quoted_binary() + " flatten " + q(patch) + " " + q(dir + "/f.surf.gii") + " --uv " + q(dir + "/uv.vtk"), "--uv " + dir + "/uv.vtk: a map is written as GIFTI", {});
   EXPECT_FALSE(fs::exists(dir + "/flat_noext"));
   EXPECT_FALSE(fs::exists(dir + "/f.surf.gii"));
   // The threshold of z is checked the same way by run, group and compare, before any work (compare
   // took inf and 1e9; run refused 0 only after mapping).
   for (const std::string& cmd : std::vector<std::string>{" normative compare a.json b.tsv o", " run --id x --out " + q(dir + "/never")})
     for (const char* t : {"inf", "0", "1e9"})
-      expect_refused(bin() + cmd + " --threshold " + t, "--threshold: '" + std::string(t) + "' is not a number from 0.5 to 10", {});
+      expect_refused(test::quoted_binary() + cmd + " --threshold " + t, "--threshold: '" + std::string(t) + "' is not a number from 0.5 to 10", {});
   EXPECT_FALSE(fs::exists(dir + "/never"));
-  EXPECT_EQ(test::run_command(bin() + " render --json", &out), 2);
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " render --json", &out), 2);
   ASSERT_NE(out.find('{'), std::string::npos) << out;
   EXPECT_EQ(nlohmann::json::parse(out.substr(out.find('{'))).at("kind"), "usage");
   EXPECT_FALSE(fs::exists(dir + "/r2.png"));
   io::write_per_vertex(dir + "/v.shape.gii", io::read_surface(patch).mesh.V.col(0));
-  EXPECT_EQ(test::run_command(bin() + " elements " + q(patch) + " " + q(dir + "/uv.surf.gii") + " " + q(dir + "/v.shape.gii") + " " +
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " elements " + q(patch) + " " + q(dir + "/uv.surf.gii") + " " + q(dir + "/v.shape.gii") + " " +
                                   q(dir + "/el") + " --k 8 --hemisphere banana",
                               &out),
             2)
       << out;
   EXPECT_NE(out.find("--hemisphere: banana not in {left,right,both}"), std::string::npos) << out;
 
-  ASSERT_EQ(test::run_command(bin() + " phantom " + q(dir + "/ph") + " --synthetic --controls 3 --patients 1 -q", &out), 0) << out;
-  ASSERT_EQ(test::run_command(bin() + " phantom " + q(dir + "/ph") + " --synthetic --controls 1 --patients 0 -q", &out), 0) << out;
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " phantom " + q(dir + "/ph") + " --synthetic --controls 3 --patients 1 -q", &out), 0) << out;
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " phantom " + q(dir + "/ph") + " --synthetic --controls 1 --patients 0 -q", &out), 0) << out;
   EXPECT_TRUE(fs::exists(dir + "/ph/sub-control01"));
   EXPECT_FALSE(fs::exists(dir + "/ph/sub-control02")) << "a subject of the earlier cohort stayed";
   EXPECT_FALSE(fs::exists(dir + "/ph/sub-patient01"));
@@ -303,14 +296,14 @@ TEST(ReliabilityCli, DegenerateNormativeReferencesAreRefusedNotReadAsNormal) {
   const std::string huge = table("h1", 1e308);
   std::string out;
   // Fewer than 3 controls.
-  EXPECT_EQ(test::run_command(bin() + " normative build " + q(dir + "/two.json") + " " + q(c1) + " " + q(c2), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " normative build " + q(dir + "/two.json") + " " + q(c1) + " " + q(c2), &out), 2) << out;
   EXPECT_NE(out.find("needs at least 3"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/two.json"));
   // SD 0 everywhere.
-  EXPECT_EQ(test::run_command(bin() + " normative build " + q(dir + "/flat.json") + " " + q(same1) + " " + q(same2) + " " + q(same3), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " normative build " + q(dir + "/flat.json") + " " + q(same1) + " " + q(same2) + " " + q(same3), &out), 2) << out;
   EXPECT_NE(out.find("SD > 0"), std::string::npos) << out;
   // 1e308: refused at build, not written as a reference the next command refuses.
-  EXPECT_EQ(test::run_command(bin() + " normative build " + q(dir + "/huge.json") + " " + q(c1) + " " + q(c2) + " " + q(huge), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " normative build " + q(dir + "/huge.json") + " " + q(c1) + " " + q(c2) + " " + q(huge), &out), 2) << out;
   EXPECT_NE(out.find("not a plausible PET value"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/huge.json"));
   // A one-control reference made by the library (as an older version or another tool could):
@@ -318,31 +311,31 @@ TEST(ReliabilityCli, DegenerateNormativeReferencesAreRefusedNotReadAsNormal) {
   analysis::NormativeReference one = analysis::empty_reference_like(control("c1", 1.0));
   analysis::add_subject(one, control("c1", 1.0), c1);
   analysis::write_reference(dir + "/one.json", one);
-  EXPECT_EQ(test::run_command(bin() + " normative compare " + q(dir + "/one.json") + " " + q(c2) + " " + q(dir + "/cmp"), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " normative compare " + q(dir + "/one.json") + " " + q(c2) + " " + q(dir + "/cmp"), &out), 2) << out;
   EXPECT_NE(out.find("no element could be compared"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/cmp.json"));
   // Three varying controls: fine.
-  EXPECT_EQ(test::run_command(bin() + " normative build " + q(dir + "/ok.json") + " " + q(c1) + " " + q(c2) + " " + q(c3) + " --quiet", &out), 0) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " normative build " + q(dir + "/ok.json") + " " + q(c1) + " " + q(c2) + " " + q(c3) + " --quiet", &out), 0) << out;
 }
 
 // ---- 11. implausible anatomy ---------------------------------------------------------------------
 
 TEST(ReliabilityCli, SwappedWhiteAndPialOrLeftAndRightAreRefused) {
   const std::string dir = test::temp_dir("rel-anatomy");
-  const std::string pet = q(sample("sub-patient01/sub-patient01_pet.nii.gz"));
-  const std::string cortex = " --lh-cortex " + q(sample("label/lh.cortex.label")) + " --rh-cortex " + q(sample("label/rh.cortex.label"));
+  const std::string pet = q(test::sample_data("sub-patient01/sub-patient01_pet.nii.gz"));
+  const std::string cortex = " --lh-cortex " + q(test::sample_data("label/lh.cortex.label")) + " --rh-cortex " + q(test::sample_data("label/rh.cortex.label"));
   std::string out;
   // White and pial swapped in the left hemisphere.
-  EXPECT_EQ(test::run_command(bin() + " run --id x --lh-white " + q(sample("surf/lh.pial")) + " --lh-pial " + q(sample("surf/lh.white")) +
-                                  " --rh-white " + q(sample("surf/rh.white")) + " --rh-pial " + q(sample("surf/rh.pial")) + cortex +
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " run --id x --lh-white " + q(test::sample_data("surf/lh.pial")) + " --lh-pial " + q(test::sample_data("surf/lh.white")) +
+                                  " --rh-white " + q(test::sample_data("surf/rh.white")) + " --rh-pial " + q(test::sample_data("surf/rh.pial")) + cortex +
                                   " --pet " + pet + " --out " + q(dir + "/a"),
                               &out),
             2)
       << out;
   EXPECT_NE(out.find("white and pial look swapped"), std::string::npos) << out;
   // Left and right swapped.
-  EXPECT_EQ(test::run_command(bin() + " run --id x --lh-white " + q(sample("surf/rh.white")) + " --lh-pial " + q(sample("surf/rh.pial")) +
-                                  " --rh-white " + q(sample("surf/lh.white")) + " --rh-pial " + q(sample("surf/lh.pial")) + cortex +
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " run --id x --lh-white " + q(test::sample_data("surf/rh.white")) + " --lh-pial " + q(test::sample_data("surf/rh.pial")) +
+                                  " --rh-white " + q(test::sample_data("surf/lh.white")) + " --rh-pial " + q(test::sample_data("surf/lh.pial")) + cortex +
                                   " --pet " + pet + " --out " + q(dir + "/b"),
                               &out),
             2)
@@ -351,14 +344,14 @@ TEST(ReliabilityCli, SwappedWhiteAndPialOrLeftAndRightAreRefused) {
   EXPECT_FALSE(fs::exists(dir + "/a"));
   EXPECT_FALSE(fs::exists(dir + "/b"));
   // One file as both hemispheres (qa4_cli D17: it said the left one lay at larger x than itself).
-  EXPECT_EQ(test::run_command(bin() + " run --id x --lh-white " + q(sample("surf/lh.white")) + " --lh-pial " + q(sample("surf/lh.pial")) +
-                                  " --rh-white " + q(sample("surf/lh.white")) + " --rh-pial " + q(sample("surf/lh.pial")) + cortex +
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " run --id x --lh-white " + q(test::sample_data("surf/lh.white")) + " --lh-pial " + q(test::sample_data("surf/lh.pial")) +
+                                  " --rh-white " + q(test::sample_data("surf/lh.white")) + " --rh-pial " + q(test::sample_data("surf/lh.pial")) + cortex +
                                   " --pet " + pet + " --out " + q(dir + "/c") + " --quiet",
                               &out),
             2)
       << out;
-  EXPECT_NE(out.find(sample("surf/lh.white") + ": the same file was given as --lh-white and --rh-white"), std::string::npos) << out;
-  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_NE(out.find(test::sample_data("surf/lh.white") + ": the same file was given as --lh-white and --rh-white"), std::string::npos) << out;
+  EXPECT_EQ(test::count_lines(out), 1) << out;
   EXPECT_FALSE(fs::exists(dir + "/c"));
 }
 
@@ -367,9 +360,9 @@ TEST(ReliabilityCli, EmptyFilesAndListsAreCalledEmpty) {
   const std::string dir = test::temp_dir("rel-empty");
   std::ofstream(dir + "/empty.txt").flush();
   std::ofstream(dir + "/empty.list") << "# no tables yet\n";
-  expect_refused(bin() + " render " + q(dir + "/o.png") + " " + q(sample("surf/lh.white")) + " --values " + q(dir + "/empty.txt"),
+  expect_refused(test::quoted_binary() + " render " + q(dir + "/o.png") + " " + q(test::sample_data("surf/lh.white")) + " --values " + q(dir + "/empty.txt"),
                  dir + "/empty.txt: holds no values (the file is empty)", {});
-  expect_refused(bin() + " normative build " + q(dir + "/r.json") + " --list " + q(dir + "/empty.list"),
+  expect_refused(test::quoted_binary() + " normative build " + q(dir + "/r.json") + " --list " + q(dir + "/empty.list"),
                  dir + "/empty.list: lists no element table (it is empty or holds only comments)", {});
   EXPECT_FALSE(fs::exists(dir + "/r.json"));
 }
@@ -388,9 +381,9 @@ TEST(ReliabilityCli, DegenerateRegionGeometryIsNamedNotAFactorisationFailure) {
   TriMesh point = m;
   point.V.setZero();
   io::write_surface(dir + "/point.surf.gii", point);
-  expect_refused(bin() + " flatten " + q(dir + "/zero.surf.gii") + " " + q(dir + "/o.surf.gii"), "are degenerate (zero area", {});
-  expect_refused(bin() + " flatten " + q(dir + "/huge.surf.gii") + " " + q(dir + "/o.surf.gii"), "not finite or beyond 1e6 mm", {});
-  expect_refused(bin() + " flatten " + q(dir + "/point.surf.gii") + " " + q(dir + "/o.surf.gii"), "collapsed to a point or a line", {});
+  expect_refused(test::quoted_binary() + " flatten " + q(dir + "/zero.surf.gii") + " " + q(dir + "/o.surf.gii"), "are degenerate (zero area", {});
+  expect_refused(test::quoted_binary() + " flatten " + q(dir + "/huge.surf.gii") + " " + q(dir + "/o.surf.gii"), "not finite or beyond 1e6 mm", {});
+  expect_refused(test::quoted_binary() + " flatten " + q(dir + "/point.surf.gii") + " " + q(dir + "/o.surf.gii"), "collapsed to a point or a line", {});
   EXPECT_FALSE(fs::exists(dir + "/o.surf.gii"));
 }
 
@@ -409,7 +402,7 @@ TEST(ReliabilityCli, SigtermWhileReadingACompressedPetLeavesNoTemporaryFile) {
   ASSERT_GE(child, 0);
   if (child == 0) {
     ::setenv("TMPDIR", tmp.c_str(), 1);
-    ::execl(test::authalic_binary().c_str(), "authalic", "sample", (dir + "/big.nii.gz").c_str(), sample("surf/lh.pial").c_str(),
+    ::execl(test::authalic_binary().c_str(), "authalic", "sample", (dir + "/big.nii.gz").c_str(), test::sample_data("surf/lh.pial").c_str(),
             (dir + "/s.func.gii").c_str(), "--quiet", static_cast<char*>(nullptr));
     ::_exit(127);
   }
@@ -440,9 +433,9 @@ TEST(ReliabilityCli, ErrorsNameTheRealProblem) {
   }
   const std::string ref = dir + "/normative.json";
   std::string out;
-  ASSERT_EQ(test::run_command(bin() + " normative build " + q(ref) + " " + q(tables[0]) + " " + q(tables[1]) + " " + q(tables[2]) + " --quiet", &out), 0) << out;
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " normative build " + q(ref) + " " + q(tables[0]) + " " + q(tables[1]) + " " + q(tables[2]) + " --quiet", &out), 0) << out;
   // compare REF REF: the patient is not a table (was: "cannot read normative.json.json").
-  expect_refused(bin() + " normative compare " + q(ref) + " " + q(ref) + " " + q(dir + "/cmp"), "this looks like a JSON file", {ref});
+  expect_refused(test::quoted_binary() + " normative compare " + q(ref) + " " + q(ref) + " " + q(dir + "/cmp"), "this looks like a JSON file", {ref});
   // A reference whose k is corrupt blames the file, not "--k".
   std::ifstream in(ref);
   std::string text((std::istreambuf_iterator<char>(in)), {});
@@ -450,19 +443,19 @@ TEST(ReliabilityCli, ErrorsNameTheRealProblem) {
   ASSERT_NE(at, std::string::npos);
   text.replace(at, 6, "\"k\": 100000");
   std::ofstream(dir + "/bad_k.json") << text;
-  expect_refused(bin() + " normative compare " + q(dir + "/bad_k.json") + " " + q(tables[0]) + " " + q(dir + "/cmp"),
+  expect_refused(test::quoted_binary() + " normative compare " + q(dir + "/bad_k.json") + " " + q(tables[0]) + " " + q(dir + "/cmp"),
                  "bad_k.json: k = 100000 is outside 1..4096", {});
   // A file name starting with '-'.
-  EXPECT_EQ(test::run_command(bin() + " subdivide -x.surf.gii y.surf.gii", &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " subdivide -x.surf.gii y.surf.gii", &out), 2) << out;
   EXPECT_NE(out.find("goes after '--'"), std::string::npos) << out;
-  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_EQ(test::count_lines(out), 1) << out;
 }
 
 // ---- issue 15, item 10: an age model without the age ---------------------------------------------
 
 TEST(ReliabilityCli, RunWithoutAgeAgainstAnAgeModelWarnsOrIsRefused) {
   const std::string dir = test::temp_dir("rel-age");
-  const std::string ref = q(sample("normative.json"));  // built with an age model
+  const std::string ref = q(test::sample_data("normative.json"));  // built with an age model
   std::string out;
   EXPECT_EQ(test::run_command(run_args(dir + "/a") + " --normative " + ref + " --require-age", &out), 2) << out;
   EXPECT_NE(out.find("has an age model but no --age was given"), std::string::npos) << out;
@@ -485,13 +478,13 @@ TEST(ReliabilityCli, RunWithoutAgeAgainstAnAgeModelWarnsOrIsRefused) {
 
 TEST(ReliabilityCli, GlobalNormalisationOfNoiseAroundZeroIsRefused) {
   const std::string dir = test::temp_dir("rel-noise");
-  io::Volume pet = io::read_volume(sample("sub-patient01/sub-patient01_pet.nii.gz"));
+  io::Volume pet = io::read_volume(test::sample_data("sub-patient01/sub-patient01_pet.nii.gz"));
   // Deterministic noise of SD ~0.7 around a mean of 0.02.
   for (std::size_t i = 0; i < pet.data.size(); ++i) pet.data[i] = 0.02f + static_cast<float>(std::sin(12.9898 * static_cast<double>(i)));
   io::write_nifti(dir + "/noise.nii.gz", pet);
   std::string out;
-  EXPECT_EQ(test::run_command(bin() + " sample " + q(dir + "/noise.nii.gz") + " " + q(sample("surf/lh.pial")) + " " +
-                                  q(dir + "/s.func.gii") + " --normalize global --cortex " + q(sample("label/lh.cortex.label")),
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " sample " + q(dir + "/noise.nii.gz") + " " + q(test::sample_data("surf/lh.pial")) + " " +
+                                  q(dir + "/s.func.gii") + " --normalize global --cortex " + q(test::sample_data("label/lh.cortex.label")),
                               &out),
             2)
       << out;
@@ -503,12 +496,12 @@ TEST(ReliabilityCli, GlobalNormalisationOfNoiseAroundZeroIsRefused) {
 // --subjects-dir wins over it.
 TEST(ReliabilityCli, SubjectsDirComesFromTheEnvironmentWhenNotGiven) {
   const std::string dir = test::temp_dir("rel-subjects-dir");
-  const std::string pet = " --pet " + q(sample("sub-patient01/sub-patient01_pet.nii.gz")) + " --out " + q(dir + "/out");
-  expect_refused("SUBJECTS_DIR=" + q(dir + "/env") + " " + bin() + " run --subject bert" + pet,
+  const std::string pet = " --pet " + q(test::sample_data("sub-patient01/sub-patient01_pet.nii.gz")) + " --out " + q(dir + "/out");
+  expect_refused("SUBJECTS_DIR=" + q(dir + "/env") + " " + test::quoted_binary() + " run --subject bert" + pet,
                  dir + "/env/bert: no such FreeSurfer subject folder", {});
-  expect_refused("SUBJECTS_DIR=" + q(dir + "/env") + " " + bin() + " run --subjects-dir " + q(dir + "/given") + " --subject bert" + pet,
+  expect_refused("SUBJECTS_DIR=" + q(dir + "/env") + " " + test::quoted_binary() + " run --subjects-dir " + q(dir + "/given") + " --subject bert" + pet,
                  dir + "/given/bert: no such FreeSurfer subject folder", {});
-  expect_refused("env -u SUBJECTS_DIR " + bin() + " run --subject bert" + pet, "give --subjects-dir or set SUBJECTS_DIR", {});
+  expect_refused("env -u SUBJECTS_DIR " + test::quoted_binary() + " run --subject bert" + pet, "give --subjects-dir or set SUBJECTS_DIR", {});
   EXPECT_FALSE(fs::exists(dir + "/out"));
 }
 
@@ -516,13 +509,13 @@ TEST(ReliabilityCli, SubjectsDirComesFromTheEnvironmentWhenNotGiven) {
 // without the cortex region the normalisation is refused before anything is read or written.
 TEST(ReliabilityCli, GlobalNormalisationAveragesOverTheCortexOnly) {
   const std::string dir = test::temp_dir("rel-global-cortex");
-  const std::string pet = sample("sub-patient01/sub-patient01_pet.nii.gz"), surf = sample("surf/lh.pial"),
-                    label = sample("label/lh.cortex.label");
-  expect_refused(bin() + " sample " + q(pet) + " " + q(surf) + " " + q(dir + "/n.func.gii") + " --normalize global",
+  const std::string pet = test::sample_data("sub-patient01/sub-patient01_pet.nii.gz"), surf = test::sample_data("surf/lh.pial"),
+                    label = test::sample_data("label/lh.cortex.label");
+  expect_refused(test::quoted_binary() + " sample " + q(pet) + " " + q(surf) + " " + q(dir + "/n.func.gii") + " --normalize global",
                  "give the cortex region", {});
   EXPECT_FALSE(fs::exists(dir + "/n.func.gii"));
-  ASSERT_EQ(test::run_command(bin() + " sample " + q(pet) + " " + q(surf) + " " + q(dir + "/raw.func.gii") + " -q"), 0);
-  ASSERT_EQ(test::run_command(bin() + " sample " + q(pet) + " " + q(surf) + " " + q(dir + "/n.func.gii") +
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " sample " + q(pet) + " " + q(surf) + " " + q(dir + "/raw.func.gii") + " -q"), 0);
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " sample " + q(pet) + " " + q(surf) + " " + q(dir + "/n.func.gii") +
                               " --normalize global --cortex " + q(label) + " -q"),
             0);
   const VectorXd raw = io::read_per_vertex(dir + "/raw.func.gii"), normed = io::read_per_vertex(dir + "/n.func.gii");
@@ -561,13 +554,13 @@ TEST(ReliabilityCli, MetricsRefusesA3dSurfaceGivenAsTheMap) {
   const std::string dir = test::temp_dir("rel-metrics");
   const std::string patch = write_patch(dir);
   std::string out;
-  EXPECT_EQ(test::run_command(bin() + " metrics " + q(sample("surf/lh.white")) + " " + q(sample("surf/lh.white")), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " metrics " + q(test::sample_data("surf/lh.white")) + " " + q(test::sample_data("surf/lh.white")), &out), 2) << out;
   EXPECT_NE(out.find("is not a flat map"), std::string::npos) << out;
-  EXPECT_EQ(test::run_command(bin() + " metrics " + q(sample("surf/lh.white")) + " " + q(sample("surf/lh.white")) + " --domain sphere", &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " metrics " + q(test::sample_data("surf/lh.white")) + " " + q(test::sample_data("surf/lh.white")) + " --domain sphere", &out), 2) << out;
   EXPECT_NE(out.find("is not a sphere map"), std::string::npos) << out;
   // A real flat map still measures.
-  ASSERT_EQ(test::run_command(bin() + " flatten " + q(patch) + " " + q(dir + "/flat.surf.gii") + " --quiet", &out), 0) << out;
-  EXPECT_EQ(test::run_command(bin() + " metrics " + q(patch) + " " + q(dir + "/flat.surf.gii"), &out), 0) << out;
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " flatten " + q(patch) + " " + q(dir + "/flat.surf.gii") + " --quiet", &out), 0) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " metrics " + q(patch) + " " + q(dir + "/flat.surf.gii"), &out), 0) << out;
 }
 
 // ---- 7, 12: group ------------------------------------------------------------------------------
@@ -577,27 +570,27 @@ std::string write_cohort(const std::string& dir, const std::vector<std::string>&
   const std::string path = dir + "/cohort.csv";
   std::ofstream c(path);
   c << "subject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex\n";
-  const std::string files = "," + sample("surf/lh.white") + "," + sample("surf/lh.pial") + "," + sample("surf/rh.white") + "," +
-                            sample("surf/rh.pial") + "," + sample("label/lh.cortex.label") + "," + sample("label/rh.cortex.label");
+  const std::string files = "," + test::sample_data("surf/lh.white") + "," + test::sample_data("surf/lh.pial") + "," + test::sample_data("surf/rh.white") + "," +
+                            test::sample_data("surf/rh.pial") + "," + test::sample_data("label/lh.cortex.label") + "," + test::sample_data("label/rh.cortex.label");
   for (const auto& r : rows) c << r << files << "\n";
   return path;
 }
 
 TEST(ReliabilityCli, GroupValidatesIdsAndAgesBeforeAnyFile) {
   const std::string dir = test::temp_dir("rel-group-ids");
-  const std::string pet = sample("sub-patient01/sub-patient01_pet.nii.gz");
+  const std::string pet = test::sample_data("sub-patient01/sub-patient01_pet.nii.gz");
   std::string out;
   const std::string bad = write_cohort(dir, {"../../escape,control,60," + pet});
-  EXPECT_EQ(test::run_command(bin() + " group " + q(bad) + " " + q(dir + "/g/out"), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(bad) + " " + q(dir + "/g/out"), &out), 2) << out;
   EXPECT_NE(out.find("letters and digits"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/g")) << "a folder was made before the id was checked";
   EXPECT_FALSE(fs::exists(dir + "/escape.log"));
   const std::string age = write_cohort(dir, {"c01,control,7O," + pet});
-  EXPECT_EQ(test::run_command(bin() + " group " + q(age) + " " + q(dir + "/g2"), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(age) + " " + q(dir + "/g2"), &out), 2) << out;
   EXPECT_NE(out.find("age '7O' is not a number"), std::string::npos) << out;
   // A row with a field missing: said so (it read as "empty rh_cortex", the fields shifted).
   const std::string short_row = write_cohort(dir, {"c01,control," + pet});
-  EXPECT_EQ(test::run_command(bin() + " group " + q(short_row) + " " + q(dir + "/g3"), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(short_row) + " " + q(dir + "/g3"), &out), 2) << out;
   EXPECT_NE(out.find("cohort.csv:2: 9 fields, but the header has 10 columns"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/g3"));
 }
@@ -608,9 +601,9 @@ TEST(ReliabilityCli, GroupValidatesIdsAndAgesBeforeAnyFile) {
 TEST(ReliabilityCli, CohortCsvIsReadAsSpreadsheetsWriteIt) {
   const std::string dir = test::temp_dir("rel-group-csv");
   const std::string pet = dir + "/pet, \"baseline\".nii.gz";
-  fs::copy_file(sample("sub-patient01/sub-patient01_pet.nii.gz"), pet);
-  const std::string files = "," + sample("surf/lh.white") + "," + sample("surf/lh.pial") + "," + sample("surf/rh.white") + "," +
-                            sample("surf/rh.pial") + "," + sample("label/lh.cortex.label") + "," + sample("label/rh.cortex.label");
+  fs::copy_file(test::sample_data("sub-patient01/sub-patient01_pet.nii.gz"), pet);
+  const std::string files = "," + test::sample_data("surf/lh.white") + "," + test::sample_data("surf/lh.pial") + "," + test::sample_data("surf/rh.white") + "," +
+                            test::sample_data("surf/rh.pial") + "," + test::sample_data("label/lh.cortex.label") + "," + test::sample_data("label/rh.cortex.label");
   const std::string quoted_pet = "\"pet, \"\"baseline\"\".nii.gz\"";
   {
     std::ofstream c(dir + "/cohort.csv", std::ios::binary);
@@ -620,15 +613,15 @@ TEST(ReliabilityCli, CohortCsvIsReadAsSpreadsheetsWriteIt) {
       << "c03,control,7O," << quoted_pet << files << "\r\n";
   }
   std::string out;
-  EXPECT_EQ(test::run_command(bin() + " group " + q(dir + "/cohort.csv") + " " + q(dir + "/g"), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(dir + "/cohort.csv") + " " + q(dir + "/g"), &out), 2) << out;
   EXPECT_NE(out.find("cohort.csv:4: age '7O' is not a number"), std::string::npos) << out;
-  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_EQ(test::count_lines(out), 1) << out;
   {
     std::ofstream c(dir + "/broken.csv", std::ios::binary);
     c << "subject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex\n"
       << "c01,control,60,\"" << pet << files << "\n";
   }
-  EXPECT_EQ(test::run_command(bin() + " group " + q(dir + "/broken.csv") + " " + q(dir + "/g2"), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(dir + "/broken.csv") + " " + q(dir + "/g2"), &out), 2) << out;
   EXPECT_NE(out.find("broken.csv:2: not valid CSV"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/g2"));
 }
@@ -638,27 +631,27 @@ TEST(ReliabilityCli, CohortCsvIsReadAsSpreadsheetsWriteIt) {
 // another K is refused before any map is computed.
 TEST(ReliabilityCli, GroupTakesRunOptionsAndAnExistingReference) {
   const std::string dir = test::temp_dir("rel-group-options");
-  const std::string pet = sample("sub-patient01/sub-patient01_pet.nii.gz"), ref = sample("normative.json");
+  const std::string pet = test::sample_data("sub-patient01/sub-patient01_pet.nii.gz"), ref = test::sample_data("normative.json");
   const std::string cohort = write_cohort(dir, {"p01,patient,68.2," + pet});
   std::string out;
-  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/k16") + " --k 16 --normative " + q(ref), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort) + " " + q(dir + "/k16") + " --k 16 --normative " + q(ref), &out), 2) << out;
   EXPECT_NE(out.find("the reference has square K = 32 elements but the subjects would get square K = 16"), std::string::npos) << out;
-  EXPECT_EQ(lines_of(out), 1) << out;
+  EXPECT_EQ(test::count_lines(out), 1) << out;
   EXPECT_FALSE(fs::exists(dir + "/k16")) << "refused before any folder or map";
   // So are a reference of another normalisation (every patient failed after every map) and, with
   // no reference, fewer controls than a reference needs (every subject ran, then exit 3).
-  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/none") + " --normalize none --normative " + q(ref), &out), 2)
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort) + " " + q(dir + "/none") + " --normalize none --normative " + q(ref), &out), 2)
       << out;
   EXPECT_NE(out.find("the reference's values are normalised 'global' but the subjects' would be 'none'"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/none"));
   fs::create_directories(dir + "/c2");
   const std::string two = write_cohort(dir + "/c2", {"c01,control,60," + pet, "c02,control,61," + pet, "p01,patient,68.2," + pet});
-  EXPECT_EQ(test::run_command(bin() + " group " + q(two) + " " + q(dir + "/two"), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(two) + " " + q(dir + "/two"), &out), 2) << out;
   EXPECT_NE(out.find("2 control(s); a reference needs at least 3"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/two"));
 
   // --threads is shared among the subjects (it was ignored: each got the machine's cores / jobs).
-  ASSERT_EQ(test::run_command(bin() + " group " + q(cohort) + " " + q(dir + "/g") + " --normative " + q(ref) +
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort) + " " + q(dir + "/g") + " --normative " + q(ref) +
                                   " --threshold 3 --no-rectangle -q --threads 1 --jobs 1",
                               &out),
             0)
@@ -678,9 +671,9 @@ TEST(ReliabilityCli, GroupTakesRunOptionsAndAnExistingReference) {
 // the sex reaches every sidecar's participant record.
 TEST(ReliabilityCli, CohortOptionalSexAndT1Columns) {
   const std::string dir = test::temp_dir("rel-group-sex");
-  const std::string pet = sample("sub-patient01/sub-patient01_pet.nii.gz"), ref = sample("normative.json");
-  const std::string files = "," + sample("surf/lh.white") + "," + sample("surf/lh.pial") + "," + sample("surf/rh.white") + "," +
-                            sample("surf/rh.pial") + "," + sample("label/lh.cortex.label") + "," + sample("label/rh.cortex.label");
+  const std::string pet = test::sample_data("sub-patient01/sub-patient01_pet.nii.gz"), ref = test::sample_data("normative.json");
+  const std::string files = "," + test::sample_data("surf/lh.white") + "," + test::sample_data("surf/lh.pial") + "," + test::sample_data("surf/rh.white") + "," +
+                            test::sample_data("surf/rh.pial") + "," + test::sample_data("label/lh.cortex.label") + "," + test::sample_data("label/rh.cortex.label");
   const auto cohort = [&](const std::string& name, const std::string& extra_header, const std::string& extra) {
     std::ofstream c(dir + "/" + name);
     c << "subject_id,role,age,pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex" << extra_header << "\n"
@@ -688,18 +681,18 @@ TEST(ReliabilityCli, CohortOptionalSexAndT1Columns) {
     return dir + "/" + name;
   };
   std::string out;
-  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort("badsex.csv", ",sex", ",x")) + " " + q(dir + "/b"), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort("badsex.csv", ",sex", ",x")) + " " + q(dir + "/b"), &out), 2) << out;
   EXPECT_NE(out.find("badsex.csv:2: sex 'x' is not F, M or O"), std::string::npos) << out;
-  EXPECT_EQ(lines_of(out), 1) << out;
-  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort("badt1.csv", ",t1", "," + dir + "/none.nii")) + " " + q(dir + "/t"), &out), 2) << out;
+  EXPECT_EQ(test::count_lines(out), 1) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort("badt1.csv", ",t1", "," + dir + "/none.nii")) + " " + q(dir + "/t"), &out), 2) << out;
   EXPECT_NE(out.find("badt1.csv:2: t1 file " + dir + "/none.nii does not exist"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/b"));
   EXPECT_FALSE(fs::exists(dir + "/t"));
   // A known column spelt otherwise would leave its values unused: refused.
-  EXPECT_EQ(test::run_command(bin() + " group " + q(cohort("capital.csv", ",Sex", ",F")) + " " + q(dir + "/c"), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort("capital.csv", ",Sex", ",F")) + " " + q(dir + "/c"), &out), 2) << out;
   EXPECT_NE(out.find("capital.csv: column 'Sex' would be ignored: the column is 'sex'"), std::string::npos) << out;
   EXPECT_FALSE(fs::exists(dir + "/c"));
-  ASSERT_EQ(test::run_command(bin() + " group " + q(cohort("ok.csv", ",sex,t1", ",female,")) + " " + q(dir + "/g") +
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort("ok.csv", ",sex,t1", ",female,")) + " " + q(dir + "/g") +
                                   " --normative " + q(ref) + " --no-rectangle -q",
                               &out),
             0)
@@ -720,7 +713,7 @@ TEST(ReliabilityCli, CohortOptionalSexAndT1Columns) {
   EXPECT_FALSE(fs::exists(dir + "/g/patients"));
   EXPECT_FALSE(fs::exists(dir + "/g/controls"));
   EXPECT_TRUE(fs::exists(dir + "/g/dataset_description.json"));
-  EXPECT_EQ(test::run_command(bin() + " run --sex q --out " + q(dir + "/r"), &out), 2) << out;
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " run --sex q --out " + q(dir + "/r"), &out), 2) << out;
   EXPECT_NE(out.find("sex 'q' is not F, M or O"), std::string::npos) << out;
 }
 
@@ -733,8 +726,8 @@ TEST(ReliabilityCli, EmptyVtkFamilyFilesGiveOneLine) {
     const std::string in = dir + "/empty." + ext;
     std::ofstream{in};
     std::string out;
-    EXPECT_EQ(test::run_command(bin() + " flatten " + q(in) + " " + q(dir + "/o.surf.gii"), &out), 2) << ext << ": " << out;
-    EXPECT_EQ(lines_of(out), 1) << ext << ": " << out;
+    EXPECT_EQ(test::run_command(test::quoted_binary() + " flatten " + q(in) + " " + q(dir + "/o.surf.gii"), &out), 2) << ext << ": " << out;
+    EXPECT_EQ(test::count_lines(out), 1) << ext << ": " << out;
     EXPECT_NE(out.find(in + ": "), std::string::npos) << out;
     EXPECT_FALSE(fs::exists(dir + "/o.surf.gii")) << ext;
   }
@@ -771,7 +764,7 @@ std::vector<pid_t> children_of(pid_t parent) {
 
 TEST(ReliabilityCli, KilledGroupTakesItsRunningSubjectsWithIt) {
   const std::string dir = test::temp_dir("rel-group-kill");
-  const std::string pet = sample("sub-patient01/sub-patient01_pet.nii.gz");
+  const std::string pet = test::sample_data("sub-patient01/sub-patient01_pet.nii.gz");
   const std::string cohort = write_cohort(dir, {"c01,control,60," + pet, "c02,control,61," + pet, "c03,control,62," + pet});
   const pid_t group = ::fork();
   ASSERT_GE(group, 0);
@@ -804,8 +797,8 @@ TEST(ReliabilityCli, KilledGroupTakesItsRunningSubjectsWithIt) {
 TEST(ReliabilityCli, GroupLogsEverySubjectAndMissingOutputFoldersAreOneLine) {
   const std::string dir = test::temp_dir("rel-group-logs");
   std::string out;
-  ASSERT_EQ(test::run_command(bin() + " phantom --synthetic --controls 3 --patients 1 -q " + q(dir + "/ph"), &out), 0) << out;
-  ASSERT_EQ(test::run_command(bin() + " group " + q(dir + "/ph/cohort.csv") + " " + q(dir + "/g") + " -q", &out), 0) << out;
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " phantom --synthetic --controls 3 --patients 1 -q " + q(dir + "/ph"), &out), 0) << out;
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " group " + q(dir + "/ph/cohort.csv") + " " + q(dir + "/g") + " -q", &out), 0) << out;
   for (const std::string id : {"control01", "control02", "control03", "patient01"}) {
     std::ifstream log(dir + "/g/logs/" + id + ".log");
     ASSERT_TRUE(log.good()) << id;
@@ -818,7 +811,7 @@ TEST(ReliabilityCli, GroupLogsEverySubjectAndMissingOutputFoldersAreOneLine) {
   EXPECT_NE(ref_text.find("3 subjects"), std::string::npos) << ref_text;
 
   const std::string table = dir + "/g/sub-patient01/sub-patient01_elements.tsv";
-  expect_refused(bin() + " normative compare " + q(dir + "/g/normative.json") + " " + q(table) + " " + q(dir + "/none/x"),
+  expect_refused(test::quoted_binary() + " normative compare " + q(dir + "/g/normative.json") + " " + q(table) + " " + q(dir + "/none/x"),
                  "folder " + dir + "/none does not exist; create it first", {table});
   EXPECT_FALSE(fs::exists(dir + "/none"));
   expect_refused(run_args("/proc/authalic-out"), "/proc/authalic-out: cannot create the output folder", {});

@@ -16,13 +16,12 @@ namespace authalic {
 namespace {
 
 std::string q(const std::string& s) { return test::shell_quote(s); }
-std::string sample(const std::string& relative) { return std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/" + relative; }
 
 std::string run_args(const std::string& id, const std::string& out) {
-  return q(test::authalic_binary()) + " run --id " + id + " --lh-white " + q(sample("surf/lh.white")) + " --lh-pial " +
-         q(sample("surf/lh.pial")) + " --rh-white " + q(sample("surf/rh.white")) + " --rh-pial " + q(sample("surf/rh.pial")) +
-         " --lh-cortex " + q(sample("label/lh.cortex.label")) + " --rh-cortex " + q(sample("label/rh.cortex.label")) + " --pet " +
-         q(sample("sub-" + id + "/sub-" + id + "_pet.nii.gz")) + " --out " + q(out) + " --no-rectangle";
+  return q(test::authalic_binary()) + " run --id " + id + " --lh-white " + q(test::sample_data("surf/lh.white")) + " --lh-pial " +
+         q(test::sample_data("surf/lh.pial")) + " --rh-white " + q(test::sample_data("surf/rh.white")) + " --rh-pial " + q(test::sample_data("surf/rh.pial")) +
+         " --lh-cortex " + q(test::sample_data("label/lh.cortex.label")) + " --rh-cortex " + q(test::sample_data("label/rh.cortex.label")) + " --pet " +
+         q(test::sample_data("sub-" + id + "/sub-" + id + "_pet.nii.gz")) + " --out " + q(out) + " --no-rectangle";
 }
 
 std::string read_text(const std::string& path) {
@@ -41,13 +40,13 @@ TEST(RunWarningsCli, SubjectInTheReferenceIsWarnedInJsonStderrAndReport) {
   const std::string dir = test::temp_dir("run-warn-member");
   const std::string note = "subject 'control05' is one of the reference's controls: its z-scores are biased toward 0";
   std::string out;
-  ASSERT_EQ(test::run_command(run_args("control05", dir + "/j") + " --normative " + q(sample("normative.json")) + " --age 52.5 --json", &out), 0)
+  ASSERT_EQ(test::run_command(run_args("control05", dir + "/j") + " --normative " + q(test::sample_data("normative.json")) + " --age 52.5 --json", &out), 0)
       << out;
   const nlohmann::json j = nlohmann::json::parse(out.substr(out.find('{')));
   ASSERT_EQ(j["warnings"].size(), 1u) << j["warnings"].dump();
   EXPECT_EQ(j["warnings"][0], note);
   EXPECT_NE(read_text(dir + "/j/sub-control05/sub-control05_report.html").find(html_text("Warning: " + note)), std::string::npos);
-  ASSERT_EQ(test::run_command(run_args("control05", dir + "/q") + " --normative " + q(sample("normative.json")) + " --age 52.5 --quiet", &out), 0)
+  ASSERT_EQ(test::run_command(run_args("control05", dir + "/q") + " --normative " + q(test::sample_data("normative.json")) + " --age 52.5 --quiet", &out), 0)
       << out;
   EXPECT_EQ(out, "authalic run: warning: " + note + "\n") << "--quiet keeps warnings";
 }
@@ -56,7 +55,7 @@ TEST(RunWarningsCli, SubjectInTheReferenceIsWarnedInJsonStderrAndReport) {
 // control and says z is not age adjusted; the header's age range says it too.
 TEST(RunWarningsCli, ReferenceWithAControlWithoutAgeSaysZIsNotAgeAdjusted) {
   const std::string dir = test::temp_dir("run-warn-ageless");
-  nlohmann::json ref = nlohmann::json::parse(std::ifstream(sample("normative.json")));
+  nlohmann::json ref = nlohmann::json::parse(std::ifstream(test::sample_data("normative.json")));
   ASSERT_EQ(ref["subjects"][0]["id"], "control01");
   ref["subjects"][0]["age"] = nullptr;
   ref["age_model"] = false;  // as `normative build` writes it when a table has no age
@@ -74,7 +73,7 @@ TEST(RunWarningsCli, ReferenceWithAControlWithoutAgeSaysZIsNotAgeAdjusted) {
   EXPECT_NE(html.find("50.3-78 years (19 of 20 known) (z NOT age adjusted)"), std::string::npos);
 
   // The shipped reference with the age: adjusted, and the header says so.
-  ASSERT_EQ(test::run_command(run_args("patient01", dir + "/a") + " --normative " + q(sample("normative.json")) + " --age 68.2 --json", &out), 0)
+  ASSERT_EQ(test::run_command(run_args("patient01", dir + "/a") + " --normative " + q(test::sample_data("normative.json")) + " --age 68.2 --json", &out), 0)
       << out;
   EXPECT_TRUE(nlohmann::json::parse(out.substr(out.find('{')))["warnings"].empty()) << out;
   EXPECT_NE(read_text(dir + "/a/sub-patient01/sub-patient01_report.html").find("50.3-78 years (z age adjusted)"), std::string::npos);

@@ -51,4 +51,12 @@ std::string shell_quote(const std::string& s) {
   return out + "'";
 }
 
+std::string sample_data(const std::string& relative) { return std::string(AUTHALIC_SOURCE_DIR) + "/sample_data/" + relative; }
+
+int count_lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
 }  // namespace authalic::test

@@ -19,6 +19,12 @@ int run_command(const std::string& command, std::string* output = nullptr);
 std::string authalic_binary();
 // `s` single-quoted for sh (inner single quotes escaped), for building command lines.
 std::string shell_quote(const std::string& s);
+// The built `authalic` executable, shell-quoted.
+inline std::string quoted_binary() { return shell_quote(authalic_binary()); }
+// A file of the project's sample_data/ folder (its absolute path).
+std::string sample_data(const std::string& relative);
+// Number of lines (newline characters) in s.
+int count_lines(const std::string& s);
 
 }  // namespace authalic::test
 
