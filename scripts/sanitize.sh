@@ -14,7 +14,7 @@ cmake --build build-asan -j"$(nproc)"
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # Third-party leaks only (fontconfig, through Cairo): scripts/lsan.supp says which and why.
-export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp"
+export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp:print_suppressions=0"  # no "Suppressions used" report in the output tests compare
 exclude=()
 [ "${SANITIZE_ALL:-0}" = 1 ] || exclude=(-E NativeResolution)
 ctest --test-dir build-asan --output-on-failure -j"$(nproc)" --timeout 1200 "${exclude[@]}"
