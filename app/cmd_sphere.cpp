@@ -217,7 +217,7 @@ void run(const SphereArgs& a) {
 
   // Acceptance (core/metrics.h) before anything is written: a sphere that is not authalic is a
   // failure (exit 3), never a success with a note.
-  const MapMetrics final_metrics = map_metrics(mesh.V, r.sphere, mesh.F, Domain::sphere(), 32);
+  const MapMetrics final_metrics = r.metrics ? *r.metrics : map_metrics(mesh.V, r.sphere, mesh.F, Domain::sphere(), 32);
   const std::string problem = authalic_acceptance_problem(final_metrics, final_metrics.vertex_ln_area.mean, true);
   const std::string failure = a.surface + ": the sphere map is not authalic: " + problem;
   if (!problem.empty() && !a.keep_failed)
@@ -295,7 +295,7 @@ void setup(CLI::App& parent) {
                   "of the seam's length past its most anterior vertex; while an element is more than 10 % off its share, "
                   "the route tries up to two more placements (0.125 and 0.0625 further on) and keeps "
                   "the sphere with the lowest element CV")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(in_range(0.0, 1.0))
       ->capture_default_str();
   sub->add_flag("--keep-failed", a->keep_failed,
                 "Expert: write the outputs even when the map fails its acceptance, marked FAILED in their metadata and "

@@ -27,8 +27,6 @@ import json, sys
 path, name, offset, status, start, end = sys.argv[1:]
 m = json.load(open(path))
 tried = m["square_route"]["corner_placements_tried"]
-def worst(p):
-    return max(p["element_max_over_mean"], 2 - p["element_min_over_mean"]) if p["covers_sphere_once"] else float("nan")
 t = "; ".join(f"{p['corner_offset_of_seam_length']:.4g}: {p['element_cv_64x32']:.4f} ({p['element_min_over_mean']:.2f}-{p['element_max_over_mean']:.2f})" for p in tried)
 mm = m["metrics"]
 print(f"| {name} | {float(offset):.3f} | {status} | {float(end) - float(start):.1f} | {t} | {mm['element_cv']:.4f} | "

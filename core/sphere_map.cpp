@@ -11,7 +11,6 @@
 #include <sstream>
 
 #include "core/error.h"
-#include "core/grid_overlap.h"
 #include "core/metrics.h"
 #include "core/sparse_cholesky.h"
 
@@ -272,8 +271,6 @@ void finish_sphere(const MatrixXd& V, const MatrixXi& F, const SphereMapOptions&
   result.sphere = std::move(S);
 }
 
-void measure_elements(const MatrixXd& V, const MatrixXi& F, const MatrixXd& S, SquarePlacement& p);
-
 // One attempt of the square route with the seam's corner at `offset`: the finished sphere in
 // `result`, and its placement (element areas measured when it covers the sphere once).
 SquarePlacement square_attempt(const MatrixXd& V, const MatrixXi& F, const SphereMapOptions& options, double offset,
@@ -294,19 +291,11 @@ SquarePlacement square_attempt(const MatrixXd& V, const MatrixXi& F, const Spher
   }
   result.route = SphereRoute::Square;
   result.conformal = result.sphere;  // this route has no conformal sphere
-  if (p.covers_once) measure_elements(V, F, result.sphere, p);
+  if (p.covers_once) {  // the acceptance's metrics (64 x 32), kept with the sphere for the caller
+    result.metrics = map_metrics(V, result.sphere, F, Domain::sphere(), 32);
+    p.element_cv = result.metrics->element_cv, p.element_min = result.metrics->element_min, p.element_max = result.metrics->element_max;
+  }
   return p;
-}
-
-// The sphere's element areas (64 x 32, as map_metrics) into p: CV and extremes over the mean.
-void measure_elements(const MatrixXd& V, const MatrixXi& F, const MatrixXd& S, SquarePlacement& p) {
-  const SphereGridSpec grid{64, 32};
-  const auto pieces = sphere_grid_overlap(S, F, grid);
-  const VectorXd cells = cell_surface_areas(pieces, face_areas(V, F), piece_face_areas(pieces, static_cast<int>(F.rows())), grid.num_cells());
-  const double mean = cells.mean();
-  p.element_cv = std::sqrt((cells.array() - mean).square().mean()) / mean;
-  p.element_min = cells.minCoeff() / mean;
-  p.element_max = cells.maxCoeff() / mean;
 }
 
 // A pocket: an element beyond kSquarePocketDeviation of the mean.

@@ -11,10 +11,12 @@
 //   4. the anatomical orientation rule (sphere_orientation below).
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/mesh.h"
+#include "core/metrics.h"
 #include "core/progress.h"
 #include "core/sphere_flow.h"
 #include "core/sphere_from_square.h"
@@ -116,6 +118,7 @@ struct SphereMapResult {
   SphereRoute route = SphereRoute::Flow;  // the route taken (Flow or Square)
   SphereFromSquareReport square_route;  // Square route only: of the placement kept
   std::vector<SquarePlacement> placements;  // Square route: each corner placement tried, in order
+  std::optional<MapMetrics> metrics;  // Square route: map_metrics of `sphere` (64 x 32), measured to choose it
   std::string fallback_reason;          // Auto: why the square route was not kept ("" = it was)
   MatrixXd sphere;        // #V by 3 on the unit sphere: the authalic map
   MatrixXd conformal;     // #V by 3: the Moebius-normalised conformal map (same rotation)
