@@ -441,10 +441,11 @@ class OutFolder {
       if (!fs::is_directory(path_, ec)) throw InputError(path_ + ": --out exists and is not a folder; give a folder");
       return;
     }
+    // Registered before it exists: a signal between creating and registering left it behind.
+    on_signal_ = std::make_unique<io::RemovedOnSignal>(path_, io::RemovedOnSignal::Kind::FolderIfEmpty);
     fs::create_directories(path_, ec);
     if (ec) throw InputError(path_ + ": cannot create the output folder (" + ec.message() + ")");
     created_ = true;
-    on_signal_ = std::make_unique<io::RemovedOnSignal>(path_, io::RemovedOnSignal::Kind::FolderIfEmpty);
   }
   ~OutFolder() {
     std::error_code ec;
