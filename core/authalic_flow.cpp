@@ -980,7 +980,7 @@ class Polish {
   // own error, kept only if the whole map's errors do not rise.
   void far_face_steps() {
     const PolishOptions& po = s_.opt.polish;
-    for (int k = 0; k < po.iterations; ++k) {
+    for (int k = 0; k < po.far_iterations; ++k) {
       std::vector<char> free_vertex(s_.nv, 0);
       const int far = free_around(po.far_band, free_vertex);
       if (far == 0) break;

@@ -199,6 +199,7 @@ MatrixXd sphere_from_square_map(const MatrixXd& V, const MatrixXi& F, const Sphe
   // A short square polish (the sphere polish below finishes it): fs741 pial, sphere element CV
   // 0.011 without, 0.0098 with 8 steps, 4 steps about as good.
   so.flow.polish.iterations = std::min(so.flow.polish.iterations, 4);
+  so.flow.polish.far_iterations = std::min(so.flow.polish.far_iterations, 4);
   so.flow.polish.float32_floor = false;  // an intermediate map, never stored
   const SquareMapResult sq = square_map(V, FB, so, progress);
   R.square_flow = sq.flow;
