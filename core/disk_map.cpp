@@ -205,7 +205,7 @@ int polish_disk_face_areas(MatrixXd& D, const MatrixXi& F, const VectorXd& targe
         << ", per-vertex mean " << cur_vertex;
     report(progress, "disk", -1, msg.str());
     slow_in_a_row = cur > 0.99 * before ? slow_in_a_row + 1 : 0;
-    if (slow_in_a_row == opt.slow_steps) break;
+    if (slow_in_a_row >= opt.slow_steps && cur_vertex <= opt.vertex_tolerance) break;
   }
   return kept;
 }

@@ -129,26 +129,32 @@ inline double flip_area_threshold(double domain_area, Eigen::Index faces) {
 
 // Per-vertex step control (the flip-preventing steps of the flows and polishes): while some face
 // is folded (folded(f) true), every vertex of such a face halves its step lam[v] and is re-placed
-// (place(v) reads lam); after 30 rounds the steps of those vertices drop to 0 (40 rounds at most).
-// One bad face thus slows only its own vertices. Deterministic (index order).
-// 30 halvings shrink a step by 1e-9, below any move that could unfold a face, so the step is
-// then dropped; 40 rounds bound the loop when a placement keeps folding.
+// (place(v) reads lam); after 30 rounds the steps of those vertices drop to 0, round after round
+// until no face is folded. One bad face thus slows only its own vertices. Deterministic (index
+// order). 30 halvings shrink a step by 1e-9, below any move that could unfold a face, so the step
+// is then dropped. Dropping one face's vertices can fold a neighbour that kept its step, so the
+// drops run until none is folded: every round stops at least one more vertex, and with every
+// vertex stopped the map is the unfolded start. (They were bounded at 10 rounds: on fs741 pial's
+// disk map a cascade outlived them and the polish returned 4 folded triangles.) A face folded at
+// the start leaves its vertices at 0 and ends the loop once nothing else moves.
 inline constexpr int kStepHalvings = 30;
-inline constexpr int kStepRounds = 40;
 template <class Folded, class Place>
 void halve_steps_until_unfolded(const MatrixXi& F, VectorXd& lam, Folded folded, Place place) {
-  for (int round = 0; round < kStepRounds; ++round) {
+  for (Eigen::Index round = 0; round <= kStepHalvings + lam.size(); ++round) {
     std::vector<char> halve(static_cast<std::size_t>(lam.size()), 0);
     bool any = false;
     for (Eigen::Index f = 0; f < F.rows(); ++f)
       if (folded(f))
         for (int c = 0; c < 3; ++c) halve[F(f, c)] = 1, any = true;
     if (!any) break;
+    bool changed = false;  // false: every folded face's vertices stand still (folded at the start)
     for (Eigen::Index v = 0; v < lam.size(); ++v)
-      if (halve[v]) {
+      if (halve[v] && lam[v] != 0.0) {
         lam[v] = round < kStepHalvings ? 0.5 * lam[v] : 0.0;
         place(v);
+        changed = true;
       }
+    if (!changed) break;
   }
 }
 
