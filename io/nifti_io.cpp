@@ -203,6 +203,15 @@ Volume read_nifti(const std::string& path, const VolumeReadOptions& options) {
     fail(path, "no usable orientation (sform_code and qform_code are both 0), so voxel positions in mm are unknown",
          "set the orientation (e.g. nibabel set_sform/set_qform, fslorient or the converter's options) and retry");
   }
+  // The affine is in the header's spatial units (NIfTI-1 xyzt_units; 0 "unknown" is taken as
+  // mm, as every tool does): metres and micrometres are converted to mm, as ITK does.
+  if (v.orientation_source == "sform" || v.orientation_source == "qform") {
+    const double to_mm = nim->xyz_units == NIFTI_UNITS_METER ? 1000.0 : nim->xyz_units == NIFTI_UNITS_MICRON ? 0.001 : 1.0;
+    if (to_mm != 1.0) {
+      v.vox2ras.topRows<3>() *= to_mm;
+      v.orientation_source += nim->xyz_units == NIFTI_UNITS_METER ? " (metres, converted to mm)" : " (micrometres, converted to mm)";
+    }
+  }
   check_affine(path, v.vox2ras, v.orientation_source);
   {
     std::lock_guard<std::mutex> lock(nifti_mutex());

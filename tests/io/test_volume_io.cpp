@@ -237,3 +237,27 @@ TEST(VolumeDispatch, ContentDecidesForUnknownExtensions) {
   expect_input_error([&] { read_volume(dir + "/x.bin"); }, dir + "/x.bin", "unknown volume format");
   expect_input_error([&] { read_volume(dir + "/missing.nii"); }, dir + "/missing.nii", "file not found");
 }
+
+// NIfTI-1 xyzt_units: an affine in metres (a header written by some converters for small-animal
+// or phantom scans) or micrometres is converted to mm, as the standard says and ITK does; 0
+// (unknown) and mm are read as mm. The file is made by nibabel with its units set.
+TEST(Nifti, AffineInMetresOrMicrometresIsConvertedToMm) {
+  AUTHALIC_REQUIRE_NIBABEL();
+  const std::string dir = temp_dir("nifti_units");
+  run_python(dir, R"(
+d = np.ones((5, 4, 3), dtype=np.float32)
+for units, scale in (('meter', 0.001), ('micron', 1000.0), ('mm', 1.0), ('unknown', 1.0)):
+    aff = np.array([[-2.,0,0,90],[0,2.5,0,-126],[0,0,3,-72],[0,0,0,1]])
+    aff[:3] *= scale
+    img = nib.Nifti1Image(d, aff)
+    img.header.set_xyzt_units(xyz=units)
+    nib.save(img, ')" + dir + R"(/' + units + '.nii')
+)");
+  const Volume v = sample_volume();
+  for (const std::string units : {"meter", "micron", "mm", "unknown"}) {
+    const Volume r = read_volume(dir + "/" + units + ".nii");
+    EXPECT_TRUE(r.vox2ras.isApprox(v.vox2ras, 1e-6)) << units << "\n" << r.vox2ras;
+    const bool converted = units == "meter" || units == "micron";
+    EXPECT_EQ(r.orientation_source.find("converted to mm") != std::string::npos, converted) << units << ": " << r.orientation_source;
+  }
+}
