@@ -421,7 +421,7 @@ TEST(RectangleCli, TwoHemispheresFillTheRectangleMirrorSymmetric) {
 // open it by 5-10 % a step: with 16 of them (the old budget, shared with the global steps) the
 // element stayed at 1.23 x (1.35 x under another machine's BLAS, exit 3); with their own budget
 // they stop on their own after 29, at 1.10 x.
-TEST(RectangleCli, OneNativeSurfaceCutOpenHasNoCrushedPocket) {
+TEST(RectangleCli, NativeResolutionSurfaceCutOpenHasNoCrushedPocket) {
   AUTHALIC_REQUIRE_SHARED(white, "fs741/lh.white.surf.gii");
   const std::string dir = authalic::test::temp_dir("rectangle_cli_fs741");
   std::string output;
