@@ -202,6 +202,8 @@ void write_anatomical_surface(const std::string& path, const io::Surface& s, con
 
 }  // namespace
 
+std::string bids_subject_label(const std::string& id) { return id.rfind("sub-", 0) == 0 ? id.substr(4) : id; }
+
 SubjectInputs inputs_from_subjects_dir(const std::string& subjects_dir, const std::string& subject) {
   const fs::path base = fs::path(subjects_dir) / subject;
   if (!fs::is_directory(base))
@@ -223,7 +225,7 @@ SubjectInputs inputs_from_subjects_dir(const std::string& subjects_dir, const st
     if (fs::exists(base / "surf" / (std::string(hemi) + ".sphere.reg"))) *reg = (base / "surf" / (std::string(hemi) + ".sphere.reg")).string();
   // BIDS labels are alphanumeric: FreeSurfer subject names often are not (bert_01). A name that
   // already is a BIDS subject ("sub-01") gives its label, not "sub01" (folder sub-sub01).
-  const std::string name = subject.rfind("sub-", 0) == 0 ? subject.substr(4) : subject;
+  const std::string name = bids_subject_label(subject);
   std::string id;
   for (char c : name)
     if (std::isalnum(static_cast<unsigned char>(c))) id += c;

@@ -42,6 +42,10 @@ void default_annotations(SubjectInputs& inputs);
 // missing file.
 SubjectInputs inputs_from_subjects_dir(const std::string& subjects_dir, const std::string& subject);
 
+// The BIDS label of a subject id as users write it: a leading "sub-" (the participant_id of
+// participants.tsv, a BIDS folder name) dropped, so "sub-01" and "01" both give sub-01/.
+std::string bids_subject_label(const std::string& id);
+
 // The names `run` gives its files in OUT/sub-<id>/ (BIDS derivatives: every name is
 // sub-<id>[_hemi-L|R][_<entity>-<value>...]_<suffix>.<extension>), in one place for run, group
 // and the tests. hemi: "L" or "R".

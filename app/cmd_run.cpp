@@ -23,6 +23,7 @@ struct RunArgs {
 
 int run(RunArgs& a) {
   analysis::SubjectInputs in = a.inputs;
+  in.id = analysis::bids_subject_label(in.id);
   if (!a.subjects_dir.empty() || !a.subject.empty()) {
     // FreeSurfer's convention: without --subjects-dir, the SUBJECTS_DIR environment variable.
     const char* env = std::getenv("SUBJECTS_DIR");
@@ -111,7 +112,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
       "the folder appears only when complete. Surfaces in tkregister RAS (FreeSurfer) are moved to scanner RAS "
       "with their footer's c_ras. Exit codes: 0 ok, 2 bad input, 3 processing failure.");
   auto& in = a->inputs;
-  sub->add_option("--id", in.id, "Subject label (letters and digits; default: the FreeSurfer subject name)");
+  sub->add_option("--id", in.id, "Subject label (letters and digits; a leading sub- is dropped: sub-01 and 01 both write sub-01/; default: the FreeSurfer subject name)");
   sub->add_option("--lh-white", in.lh_white, "Left white surface (FreeSurfer, GIFTI, VTK, ...; mm)");
   sub->add_option("--lh-pial", in.lh_pial, "Left pial surface, same vertices as --lh-white");
   sub->add_option("--rh-white", in.rh_white, "Right white surface");

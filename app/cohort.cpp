@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "analysis/pipeline.h"
 #include "app/command.h"
 #include "core/error.h"
 
@@ -112,7 +113,7 @@ std::vector<CohortSubject> read_cohort(const std::string& path) {
                        " columns; check the row for a missing or extra comma (a field with a comma needs quotes)");
     CohortSubject s;
     s.line = lineno;
-    s.id = get("subject_id");
+    s.id = analysis::bids_subject_label(get("subject_id"));  // "sub-01" as participants.tsv writes it
     if (s.id.empty()) throw InputError(where + ": empty subject_id");
     // The id becomes folder and log names (sub-<id>, logs/<id>.log): letters and digits only
     // (BIDS labels), checked before any file is made, so '../x' cannot escape the output folder.

@@ -595,6 +595,35 @@ TEST(ReliabilityCli, GroupValidatesIdsAndAgesBeforeAnyFile) {
   EXPECT_FALSE(fs::exists(dir + "/g3"));
 }
 
+// QA round 4 (D19): `run --subject sub-01` dropped the BIDS prefix but `run --id sub-01` and a
+// cohort's subject_id "sub-01" (participants.tsv's participant_id, as users copy it) were refused
+// for the hyphen. A leading sub- is now dropped everywhere: the same subject, the same folder.
+TEST(ReliabilityCli, BidsSubPrefixNamesTheSameSubjectEverywhere) {
+  const std::string dir = test::temp_dir("rel-group-sub");
+  const std::string pet = test::sample_data("sub-patient01/sub-patient01_pet.nii.gz");
+  std::string out;
+  const std::string ok = write_cohort(dir, {"sub-c01,control,60," + pet, "c02,control,61," + pet, "sub-c03,control,62," + pet});
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " group " + q(ok) + " " + q(dir + "/g") + " --check --json -q", &out), 0) << out;
+  const auto j = nlohmann::json::parse(out.substr(out.find('{'))).at("subjects");
+  ASSERT_EQ(j.size(), 3u) << out;
+  EXPECT_EQ(j[0].at("id"), "c01");
+  EXPECT_EQ(j[1].at("id"), "c02");
+  EXPECT_EQ(j[2].at("id"), "c03");
+  const std::string twice = write_cohort(dir, {"sub-c01,control,60," + pet, "c01,control,61," + pet, "c03,control,62," + pet});
+  EXPECT_EQ(test::run_command(test::quoted_binary() + " group " + q(twice) + " " + q(dir + "/g2") + " --check", &out), 2) << out;
+  EXPECT_NE(out.find("subject 'c01' is listed twice"), std::string::npos) << out;
+  // `run --id sub-x`: refused before for the hyphen; now the folder sub-x/, files sub-x_*.
+  std::string inputs;
+  for (const char* h : {"lh", "rh"})
+    inputs += std::string(" --") + h + "-white " + q(test::sample_data(std::string("surf/") + h + ".white")) + " --" + h + "-pial " +
+              q(test::sample_data(std::string("surf/") + h + ".pial")) + " --" + h + "-cortex " +
+              q(test::sample_data(std::string("label/") + h + ".cortex.label"));
+  ASSERT_EQ(test::run_command(test::quoted_binary() + " run --id sub-x" + inputs + " --pet " + q(pet) + " --out " + q(dir + "/r") + " -q", &out), 0)
+      << out;
+  EXPECT_TRUE(fs::exists(dir + "/r/sub-x/sub-x_report.html"));
+  EXPECT_FALSE(fs::exists(dir + "/r/sub-sub-x"));
+}
+
 // Issue 15 item 14: the cohort list is read as spreadsheets write CSV (libcsv): a UTF-8 byte-order
 // mark, CRLF line ends, a quoted path holding a comma and a doubled quote. The rows before a bad
 // one parse (their files are found), and messages name the right line.
