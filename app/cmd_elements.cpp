@@ -243,7 +243,7 @@ const bool registered = register_command({45, [](CLI::App& parent) {
       ->check(CLI::IsMember({"left", "right", "both"}));
   sub->add_option("--subject", a->subject, "Subject id recorded in the table (used by `authalic normative`)");
   sub->add_option("--age", a->age, "Subject's age in years, recorded for the normative age model")->check(age_years());
-  sub->add_option("--normalisation", a->normalisation,
+  sub->add_option("--normalisation,--normalize", a->normalisation,
                   "Intensity normalisation of VALUES (default: from its metadata as written by `authalic sample`)");
   sub->add_option("--units", a->units, "Units of VALUES (default: from its metadata)");
   add_common_options(*sub);

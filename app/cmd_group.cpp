@@ -400,7 +400,7 @@ const bool registered = register_command({60, [](CLI::App& parent) {
       ->check(in_range(1, 256));
   add_k_option(*sub, args->k, {DomainKind::Square}, 2, 512);
   sub->add_flag("--force", args->force, "Write into an existing output folder");
-  sub->add_option("--normalize", args->normalize,
+  sub->add_option("--normalize,--normalise", args->normalize,
                   "Intensity normalisation of every subject, as `run --normalize`: none, global (cortical mean), or a "
                   "reference-region mask NIfTI (SUVR)")
       ->capture_default_str();

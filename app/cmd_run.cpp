@@ -153,7 +153,7 @@ const bool registered = register_command({70, [](CLI::App& parent) {
   add_k_option(*sub, a->options.k, {DomainKind::Square}, 2, 512);
   sub->add_option("--depth", a->options.depth_mm, "Normal projection depth, mm (default 10, Zou et al. 2011)")
       ->check(in_range(0.0, 50.0));
-  sub->add_option("--normalize", a->options.normalize,
+  sub->add_option("--normalize,--normalise", a->options.normalize,
                   "Intensity normalisation: none, global (cortical mean), or a reference-region mask NIfTI (SUVR)");
   sub->add_option("--threshold", a->options.z_threshold, "|z| at or beyond which an element is abnormal (default 2)")
       ->check(in_range(0.5, 10));

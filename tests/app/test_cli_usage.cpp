@@ -25,7 +25,7 @@ TEST(CliUsage, MistypedSubcommandsAndOptionsAreNamed) {
   expect_usage_error("normative biuld r.json a.tsv", "authalic normative: unknown subcommand 'biuld'; did you mean build? (see authalic normative --help)");
   expect_usage_error("flatten --bogus", "authalic flatten: unknown option --bogus (see authalic flatten --help)");
   expect_usage_error("run --outt x", "authalic run: unknown option --outt; did you mean --out? (see authalic run --help)");
-  expect_usage_error("run --out x --normalise none", "authalic run: unknown option --normalise; did you mean --normalize? (see authalic run --help)");
+  expect_usage_error("run --out x --normalze none", "authalic run: unknown option --normalze; did you mean --normalize? (see authalic run --help)");
   // --name=value is one option.
   expect_usage_error("normative compare --thresold=3 a b c",
                      "authalic normative compare: unknown option --thresold; did you mean --threshold? (see authalic normative compare --help)");
@@ -38,6 +38,17 @@ TEST(CliUsage, MistypedSubcommandsAndOptionsAreNamed) {
   EXPECT_EQ(test::run_command(test::quoted_binary() + " --version", &out), 0) << out;
   EXPECT_EQ(test::run_command(test::quoted_binary() + " normative compare --help", &out), 0) << out;
   EXPECT_NE(out.find("--threshold"), std::string::npos) << out;
+}
+
+// QA round 4 (D18): the normalisation option was --normalize in run and group but --normalisation
+// in elements (and --normalise in sample): each now takes the other spellings too, so a script
+// written against one subcommand works with the others.
+TEST(CliUsage, NormalisationOptionTakesEverySpellingItHasElsewhere) {
+  std::string out;
+  for (const char* line : {"run --out x --normalise none", "group c.csv o --normalise none", "elements --normalize global a b c"}) {
+    EXPECT_EQ(test::run_command(test::quoted_binary() + " " + std::string(line), &out), 2) << line;
+    EXPECT_EQ(out.find("unknown option"), std::string::npos) << line << "\n" << out;
+  }
 }
 
 TEST(CliUsage, RangeErrorsPrintTheBoundsAsWritten) {
