@@ -36,7 +36,7 @@ struct DiskMapOptions {
   int slow_steps = 3;
   // ... but only once the per-vertex mean |ln area ratio| is within this (the flow's tolerance).
   // A carry that folded many slivers leaves an untangled patch whose error comes down in bursts
-  // after runs of slow steps: fs741 pial on one machine's BLAS (306 folds, 7,313 vertices
+  // after runs of slow steps: fs741 pial on one machine (306 folds, 7,313 vertices
   // untangled) stopped at per-vertex 0.0134, element CV 0.014 (exit 3); polished on, 0.0067 and
   // 0.0078 in 84 steps.
   double vertex_tolerance = 0.006;
