@@ -7,6 +7,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -167,13 +168,27 @@ std::string seam_text(double seam_x) {
   return s;
 }
 
-double parse_seam(const std::string& text, const std::string& what) {
+namespace {
+// "none" -> NaN, else a number in (0, upper); otherwise InputError naming the file, the key and
+// what the value should be.
+double parse_seam_value(const std::string& text, const std::string& what, const char* key, double upper,
+                        const std::string& expected, const std::string& remedy) {
   if (text == "none") return std::nan("");
   double x = 0;
   const auto r = std::from_chars(text.data(), text.data() + text.size(), x);
-  if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !(x > 0 && x < 2))
-    throw InputError(what + ": metadata " + kSeamKey + " '" + text + "' is not a seam x in (0, 2) or \"none\"; rewrite the map with `authalic rectangle`");
+  if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !(x > 0 && x < upper))
+    throw InputError(what + ": metadata " + key + " '" + text + "' is not " + expected + " or \"none\"; rewrite the map with " + remedy);
   return x;
+}
+}  // namespace
+
+double parse_seam(const std::string& text, const std::string& what) {
+  return parse_seam_value(text, what, kSeamKey, 2.0, "a seam x in (0, 2)", "`authalic rectangle`");
+}
+
+double parse_seam_mm(const std::string& text, const std::string& what) {
+  return parse_seam_value(text, what, kSeamMmKey, std::numeric_limits<double>::infinity(), "a seam x in mm",
+                          "`authalic rectangle --flat`");
 }
 
 std::string table_correspondence(const ElementTable& table) {

@@ -46,6 +46,8 @@ inline constexpr const char* kSeamMmKey = "authalic_seam_x_mm";
 std::string seam_text(double seam_x);
 // seam_x from that metadata text (what: the file, for the error): "none" -> NaN; a number in (0, 2).
 double parse_seam(const std::string& text, const std::string& what);
+// The same for kSeamMmKey (a file scaled to mm): "none" -> NaN; a positive number of mm.
+double parse_seam_mm(const std::string& text, const std::string& what);
 ElementGrid element_grid(const Domain& domain, int k);
 
 struct Element {

@@ -3,7 +3,6 @@
 // ../shared/tools/evalmap.py).
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -70,12 +69,8 @@ void run(const MetricsArgs& a) {
   if (domain.kind == DomainKind::Rectangle) {
     if (const auto seam = map.metadata.find(analysis::kSeamKey); seam != map.metadata.end()) {
       domain.seam_x = analysis::parse_seam(seam->second, a.map);
-    } else if (const auto mm = map.metadata.find(analysis::kSeamMmKey); mm != map.metadata.end() && mm->second != "none") {
-      char* end = nullptr;
-      seam_mm = std::strtod(mm->second.c_str(), &end);
-      if (end == mm->second.c_str() || *end != '\0' || !(seam_mm > 0) || !std::isfinite(seam_mm))
-        throw InputError(a.map + ": metadata " + analysis::kSeamMmKey + " '" + mm->second +
-                         "' is not a seam x in mm or \"none\"; rewrite the map with `authalic rectangle --flat`");
+    } else if (const auto mm = map.metadata.find(analysis::kSeamMmKey); mm != map.metadata.end()) {
+      seam_mm = analysis::parse_seam_mm(mm->second, a.map);
     }
   }
   if (map.mesh.num_vertices() < nv)

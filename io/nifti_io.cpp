@@ -182,6 +182,7 @@ Volume read_nifti(const std::string& path, const VolumeReadOptions& options) {
   }
   // Orientation before data: no point loading an image we must refuse.
   Volume v;
+  bool scanner_affine = false;  // the sform or qform: in the header's spatial units
   const std::string descrip(nim->descrip, strnlen(nim->descrip, sizeof(nim->descrip)));
   if (nim->sform_code == NIFTI_XFORM_TEMPLATE_OTHER && descrip.find(kMapGridMarker) != std::string::npos) {
     // An element image written by authalic: its own grid space, never a scanner's.
@@ -193,9 +194,11 @@ Volume read_nifti(const std::string& path, const VolumeReadOptions& options) {
   } else if (nim->sform_code > 0) {
     v.vox2ras = to_eigen(nim->sto_xyz);
     v.orientation_source = "sform";
+    scanner_affine = true;
   } else if (nim->qform_code > 0) {
     v.vox2ras = to_eigen(nim->qto_xyz);
     v.orientation_source = "qform";
+    scanner_affine = true;
   } else if (options.allow_map_grid) {
     v.vox2ras = Eigen::Vector4d(nim->dx > 0 ? nim->dx : 1.0, nim->dy > 0 ? nim->dy : 1.0, nim->dz > 0 ? nim->dz : 1.0, 1.0).asDiagonal();
     v.orientation_source = "pixdim";
@@ -205,7 +208,7 @@ Volume read_nifti(const std::string& path, const VolumeReadOptions& options) {
   }
   // The affine is in the header's spatial units (NIfTI-1 xyzt_units; 0 "unknown" is taken as
   // mm, as every tool does): metres and micrometres are converted to mm, as ITK does.
-  if (v.orientation_source == "sform" || v.orientation_source == "qform") {
+  if (scanner_affine) {
     const double to_mm = nim->xyz_units == NIFTI_UNITS_METER ? 1000.0 : nim->xyz_units == NIFTI_UNITS_MICRON ? 0.001 : 1.0;
     if (to_mm != 1.0) {
       v.vox2ras.topRows<3>() *= to_mm;
