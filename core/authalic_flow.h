@@ -96,7 +96,8 @@ struct PolishOptions {
   int iterations = 16;           // at most; it stops at a step removing < 1 % of the per-face error (two in a row while not converged)
   double band = 0.05;            // corrects faces whose |ln area ratio| exceeds this band
   double far_band = 0.5;         // then local steps about the faces still beyond this
-  // At most this many far-face steps; they stop at a step removing < 1 % of those faces' error.
+  // At most this many far-face steps; they stop after three steps in a row each removing < 1 % of
+  // those faces' error.
   // A pocket crushed against a side opens by 5-10 % a step: the one-surface rectangle of fs741
   // white took 29 (with 16 it was left at 1.23 x an element's share, 1.10 x after 29).
   int far_iterations = 64;

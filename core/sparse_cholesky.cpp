@@ -244,38 +244,4 @@ bool SpdSolver::solve_preconditioned(const SparseMatrix& A, const MatrixXd& B, M
   return false;
 }
 
-VectorXd levenberg_marquardt_step(const SparseMatrix& J, const VectorXd& r, int cg_iterations) {
-  // Preconditioned CG on (Jᵀ J + μ D) δ = −Jᵀ r without forming Jᵀ J: each product is J p then
-  // Jᵀ (J p), 2 nnz(J) multiplications instead of nnz(Jᵀ J) ≈ 2.5 nnz(J) plus the sparse
-  // product per step (fs741 pial polish: the product and Jᵀ J's mat-vecs were 25 % of the map).
-  // Jacobi preconditioner, relative residual tolerance 1e-4, x0 = 0 (Eigen's ConjugateGradient).
-  const Eigen::Index n = J.cols();
-  const VectorXd d = J.cwiseAbs2().transpose() * VectorXd::Ones(J.rows());  // diag(Jᵀ J)
-  const VectorXd shift = 1e-3 * d.array() + 1e-18;
-  const VectorXd inv_m = (d + shift).cwiseInverse();
-  const VectorXd b = -(J.transpose() * r);
-  VectorXd x = VectorXd::Zero(n);
-  const double threshold = std::max(1e-8 * b.squaredNorm(), std::numeric_limits<double>::min());
-  VectorXd res = b;
-  if (!(res.squaredNorm() >= threshold)) return x;
-  VectorXd p = inv_m.cwiseProduct(res), z(n), Ap(n), Jp(J.rows());
-  double rz = res.dot(p);
-  // J p row by row (a row-major copy: gathers instead of scatters, and parallel like Jᵀ q).
-  const Eigen::SparseMatrix<double, Eigen::RowMajor> Jr = J;
-  for (int it = 0; it < cg_iterations; ++it) {
-    Jp.noalias() = Jr * p;
-    Ap.noalias() = J.transpose() * Jp;
-    Ap += shift.cwiseProduct(p);
-    const double alpha = rz / p.dot(Ap);
-    x += alpha * p;
-    res -= alpha * Ap;
-    if (res.squaredNorm() < threshold) break;
-    z = inv_m.cwiseProduct(res);
-    const double rz_new = res.dot(z);
-    p = z + (rz_new / rz) * p;
-    rz = rz_new;
-  }
-  return x;
-}
-
 }  // namespace authalic

@@ -90,10 +90,4 @@ class SpdSolver {
   std::unique_ptr<Impl> impl_;
 };
 
-// One inexact Levenberg-Marquardt step for min |J x + r|²: (Jᵀ J + μ diag(Jᵀ J)) δ = −Jᵀ r with
-// μ = 1e-3 (Marquardt's scaling), by at most cg_iterations conjugate-gradient iterations
-// (relative tolerance 1e-4). The polishes of the square and sphere maps, whose line searches
-// keep only the steps that help, so an unconverged solve costs accuracy of a step, not safety.
-VectorXd levenberg_marquardt_step(const SparseMatrix& J, const VectorXd& r, int cg_iterations);
-
 }  // namespace authalic

@@ -84,33 +84,6 @@ TEST(SpdSolver, RefactorWithAnotherPatternReanalyses) {
   EXPECT_LT(residual(B, solver.solve(b), b), 1e-10);
 }
 
-TEST(LevenbergMarquardt, MatrixFreeStepMatchesTheDenseNormalEquations) {
-  // A random sparse 60 x 40 Jacobian: with enough iterations the CG step is the exact solution of
-  // (Jᵀ J + 1e-3 diag(Jᵀ J)) δ = −Jᵀ r; with 3 it is not yet (the budget is honoured).
-  std::vector<Eigen::Triplet<double>> t;
-  unsigned seed = 7;
-  auto rnd = [&] {
-    seed = seed * 1103515245u + 12345u;
-    return ((seed >> 8) % 10000) / 5000.0 - 1.0;
-  };
-  for (int i = 0; i < 60; ++i)
-    for (int k = 0; k < 4; ++k) t.emplace_back(i, (i * 7 + k * 13) % 40, rnd());
-  SparseMatrix J(60, 40);
-  J.setFromTriplets(t.begin(), t.end());
-  VectorXd r(60);
-  for (int i = 0; i < 60; ++i) r[i] = rnd();
-  const Eigen::MatrixXd Jd(J);
-  Eigen::MatrixXd N = Jd.transpose() * Jd;
-  N.diagonal() *= 1.0 + 1e-3;
-  const VectorXd exact = N.ldlt().solve(-Jd.transpose() * r);
-  const VectorXd step = levenberg_marquardt_step(J, r, 500);
-  EXPECT_LT((step - exact).norm() / exact.norm(), 1e-3);
-  const VectorXd short_step = levenberg_marquardt_step(J, r, 3);
-  EXPECT_GT((short_step - exact).norm() / exact.norm(), 1e-3);
-  // A zero residual asks for no move.
-  EXPECT_EQ(levenberg_marquardt_step(J, VectorXd::Zero(60), 50).norm(), 0.0);
-}
-
 TEST(SpdSolver, PreconditionedSolveReachesTheDirectSolution) {
   // CG preconditioned with the factorisation of other weights of the same grid (the stretch-energy
   // steps after the first): it converges to A's own direct solution, counts its iterations, and
