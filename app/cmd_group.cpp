@@ -122,6 +122,7 @@ struct GroupArgs {
   // Passed to every subject's `run` (see `authalic run --help`).
   std::string normalize = "global";
   double threshold = 2.0;
+  int min_cluster = 3;
   bool rectangle = true, rescale = true;
   std::string normative;  // an existing reference for the patients: none is built from the controls
   std::string atlas;      // run --atlas: atlas correspondence for subjects with sphere.reg columns
@@ -132,7 +133,7 @@ struct GroupArgs {
 std::vector<std::string> run_options(const GroupArgs& a) {
   std::ostringstream t;
   t << a.threshold;
-  std::vector<std::string> o = {"--normalize", a.normalize, "--threshold", t.str()};
+  std::vector<std::string> o = {"--normalize", a.normalize, "--threshold", t.str(), "--min-cluster", std::to_string(a.min_cluster)};
   if (!a.rectangle) o.push_back("--no-rectangle");
   if (!a.rescale) o.push_back("--no-rescale");
   if (!a.atlas.empty()) o.insert(o.end(), {"--atlas", a.atlas});
@@ -388,7 +389,7 @@ const bool registered = register_command({60, [](CLI::App& parent) {
       "group",
       "Run the per-subject pipeline for a cohort (controls first), build the normative reference from the "
       "controls (or take an existing one, --normative), then compare the patients with it; run's --normalize, "
-      "--threshold, --no-rectangle and --no-rescale apply to every subject. COHORT.csv columns: subject_id,role(control|patient),age,"
+      "--threshold, --min-cluster, --no-rectangle and --no-rescale apply to every subject. COHORT.csv columns: subject_id,role(control|patient),age,"
       "pet,lh_white,lh_pial,rh_white,rh_pial,lh_cortex,rh_cortex, optional t1 (run --t1: the PET is registered to it), "
       "sex (F, M, O) and lh_sphere_reg, rh_sphere_reg (with --atlas: atlas correspondence) (paths relative to the CSV; RFC 4180 CSV as spreadsheets "
       "write it: quoted fields, CRLF, a UTF-8 byte-order mark). Writes "
@@ -406,6 +407,10 @@ const bool registered = register_command({60, [](CLI::App& parent) {
       ->capture_default_str();
   sub->add_option("--threshold", args->threshold, "|z| at or beyond which a patient's element is abnormal")
       ->check(in_range(0.5, 10))
+      ->capture_default_str();
+  sub->add_option("--min-cluster", args->min_cluster,
+                  "Smallest cluster of a patient's abnormal elements reported, in elements, as `run --min-cluster`")
+      ->check(in_range(1, 100000))
       ->capture_default_str();
   sub->add_flag("--no-rectangle", [args](std::int64_t) { args->rectangle = false; }, "Skip the whole-brain 2:1 rectangle map of every subject");
   sub->add_flag("--no-rescale", [args](std::int64_t) { args->rescale = false; }, "As `run --no-rescale`, for the patients");

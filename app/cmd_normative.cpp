@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/normative.h"
+#include "analysis/report_inputs.h"
 #include "app/command.h"
 #include "core/error.h"
 #include "io/surface_io.h"
@@ -42,6 +43,7 @@ struct CompareArgs {
   bool plain_sd = false;
   bool no_rescale = false;
   int min_subjects = 3;
+  int min_cluster = 1;
 };
 
 // CPU seconds of all threads since `start`: the command's cost on an idle machine.
@@ -156,7 +158,8 @@ int run_compare(const CompareArgs& a) {
   o.predictive = !a.plain_sd;
   o.rescale = !a.no_rescale;
   o.min_subjects = a.min_subjects;
-  const analysis::Comparison cmp = analysis::compare_to_reference(ref, patient, o);
+  analysis::Comparison cmp = analysis::compare_to_reference(ref, patient, o);
+  const int dropped = analysis::drop_small_clusters(cmp, a.min_cluster);
   if (!a.labels.empty() && a.labels.size() != ref.hemispheres.size())
     throw InputError("--labels: " + std::to_string(a.labels.size()) + " label file(s) for " + std::to_string(ref.hemispheres.size()) +
                      " hemisphere block(s); give one per block, in the order " + [&] {
@@ -182,6 +185,9 @@ int run_compare(const CompareArgs& a) {
   }
   const auto paths = analysis::write_comparison_outputs(a.prefix, ref, a.reference, patient, a.patient, cmp, vertex_elements);
   for (const auto& n : cmp.notes) info("authalic normative compare: note: " + n);
+  if (dropped > 0)
+    info("authalic normative compare: " + std::to_string(dropped) + " cluster(s) of fewer than " + std::to_string(a.min_cluster) +
+         " elements not reported (--min-cluster)");
   if (!cmp.chance_note.empty()) info("authalic normative compare: note: clusters have no p: " + cmp.chance_note);
   info("authalic normative compare: " + std::to_string(cmp.num_compared) + " elements compared, " + std::to_string(cmp.num_hypo) +
        " hypo and " + std::to_string(cmp.num_hyper) + " hyper at |z| >= " + std::to_string(cmp.threshold) + ", " +
@@ -253,6 +259,10 @@ const bool registered = register_command({50, [](CLI::App& parent) {
   compare->add_option("--min-subjects", c->min_subjects, "Elements with fewer controls get no z")
       ->check(in_range(2, 1000000))
       ->capture_default_str();
+  compare->add_option("--min-cluster", c->min_cluster,
+                      "Smallest cluster of abnormal elements reported, in elements (default 1, every cluster; `run` and "
+                      "`group` report from 3)")
+      ->check(in_range(1, 100000));
   add_common_options(*compare);
   compare->callback([c]() { set_exit_code(run_compare(*c)); });
 }});

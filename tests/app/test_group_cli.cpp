@@ -164,16 +164,20 @@ TEST(GroupCli, PatientsAreNotRunOrListedOkWithoutAReference) {
 }
 
 // D5: with a given reference, controls_used is the number of controls in it, not the cohort's.
+// --min-cluster reaches every patient's run (its report lists it among the parameters).
 TEST(GroupCli, ControlsUsedCountsTheGivenReferencesControls) {
   const std::string dir = test::temp_dir("group-controls-used");
   const std::string cohort = write_cohort(dir + "/cohort.csv", {row("patient01", "patient", "68.2", pet_of("patient01"))});
   std::string out;
   ASSERT_EQ(test::run_command(test::quoted_binary() + " group " + q(cohort) + " " + q(dir + "/g") + " --normative " + q(test::sample_data("normative.json")) +
-                                  " --no-rectangle --json --threads 2",
+                                  " --no-rectangle --min-cluster 7 --json --threads 2",
                               &out),
             0)
       << out;
   const nlohmann::json j = json_of(out);
+  std::ifstream report(dir + "/g/sub-patient01/sub-patient01_report.html");
+  const std::string html((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+  EXPECT_NE(html.find("<tr><th>minimum cluster size</th><td>7 elements</td></tr>"), std::string::npos);
   EXPECT_EQ(j["controls_used"], 20) << j.dump(2);
   EXPECT_EQ(j["controls_succeeded"], 0) << j.dump(2);
   EXPECT_EQ(j["reference"], test::sample_data("normative.json"));

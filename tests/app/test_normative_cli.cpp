@@ -89,6 +89,21 @@ TEST(NormativeCli, BuildMergeCompare) {
   EXPECT_EQ(j["chance_clusters"]["controls"], 10);
   const double p = j["clusters"][0]["p_controls"].get<double>();
   EXPECT_DOUBLE_EQ(p, (1.0 + j["clusters"][0]["controls_as_large"].get<int>()) / 11);
+  // --min-cluster, as in `run`: the 3-element cluster is kept at 3 and dropped, and said so, at 4
+  // (its elements are still counted as abnormal).
+  for (const int min_cluster : {3, 4}) {
+    std::string said;
+    ASSERT_EQ(test::run_command(exe + " normative compare " + dir + "/merged.json " + dir + "/p1_elements.csv " + dir + "/cmp_min" +
+                                    std::to_string(min_cluster) + " --min-cluster " + std::to_string(min_cluster),
+                                &said),
+              0)
+        << said;
+    const auto jm = nlohmann::json::parse(std::ifstream(dir + "/cmp_min" + std::to_string(min_cluster) + ".json"));
+    EXPECT_EQ(jm["counts"]["hypo"], 3);
+    EXPECT_EQ(jm["clusters"].size(), min_cluster == 3 ? 1u : 0u) << said;
+    EXPECT_EQ(said.find("1 cluster(s) of fewer than 4 elements not reported (--min-cluster)") != std::string::npos, min_cluster == 4)
+        << said;
+  }
   // A reference written before the values were kept: compared, without p, and said so.
   {
     nlohmann::json old = nlohmann::json::parse(std::ifstream(dir + "/merged.json"));
