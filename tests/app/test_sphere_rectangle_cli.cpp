@@ -420,7 +420,8 @@ TEST(RectangleCli, TwoHemispheresFillTheRectangleMirrorSymmetric) {
 // at 1.87 x its share); the flow and the global polish leave it at 1.23 x, and the far-face steps
 // open it by 5-10 % a step: with 16 of them (the old budget, shared with the global steps) the
 // element stayed at 1.23 x (1.35 x under another machine's BLAS, exit 3); with their own budget
-// they stop on their own after 29, at 1.10 x.
+// they stopped after 29, at 1.10 x, but a slow step among fast ones ended them at 1.62 x once the
+// CG's summation order changed: they now end after three slow steps in a row (35 steps, 1.11 x).
 TEST(RectangleCli, NativeResolutionSurfaceCutOpenHasNoCrushedPocket) {
   AUTHALIC_REQUIRE_SHARED(white, "fs741/lh.white.surf.gii");
   const std::string dir = authalic::test::temp_dir("rectangle_cli_fs741");
