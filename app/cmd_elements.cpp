@@ -241,7 +241,7 @@ const bool registered = register_command({45, [](CLI::App& parent) {
       ->capture_default_str();
   sub->add_option("--hemisphere", a->hemisphere, "left, right or both (default: from the surface's metadata or name)")
       ->check(CLI::IsMember({"left", "right", "both"}));
-  sub->add_option("--subject", a->subject, "Subject id recorded in the table (used by `authalic normative`)");
+  sub->add_option("--id,--subject", a->subject, "Subject id recorded in the table (used by `authalic normative`), as `run --id`");
   sub->add_option("--age", a->age, "Subject's age in years, recorded for the normative age model")->check(age_years());
   sub->add_option("--normalisation,--normalize", a->normalisation,
                   "Intensity normalisation of VALUES (default: from its metadata as written by `authalic sample`)");

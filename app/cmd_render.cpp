@@ -82,8 +82,8 @@ void setup(CLI::App& parent) {
                   "e.g. inserted by the flattening, take their neighbours' colour)");
   sub->add_option("--colormap", a->colormap, "gray, viridis, coolwarm, hot (append _r to reverse)")->capture_default_str();
   sub->add_option("--range", a->range, "Colour range: LO HI (default: 2nd-98th percentile)")->expected(2);
-  sub->add_option("--label", a->label, "Colour-bar label with units, e.g. 'sulc (mm)'");
-  sub->add_option("--grid", a->grid, "Draw the K x K element grid (2K x K on the rectangle)")->check(in_range(0, 512));
+  sub->add_option("--colorbar-label,--label", a->label, "Colour-bar label with units, e.g. 'sulc (mm)'");
+  sub->add_option("--element-grid,--grid", a->grid, "Draw the K x K element grid (2K x K on the rectangle)")->check(in_range(0, 512));
   sub->add_option("--domain", a->domain, "square ([0,1]^2), rectangle ([0,2] x [0,1]) or fit (the map's bounding box, "
                                          "e.g. a flat surface in mm or a FreeSurfer flat patch)")
       ->check(CLI::IsMember({"square", "rectangle", "fit"}))

@@ -44,7 +44,7 @@ TEST(ElementsCli, WritesTableImagesAndLabelsWithEqualAreasOnAnIsometricMap) {
   io::write_per_vertex(dir + "/pet.func.gii", values, fo);
   std::string out;
   const std::string cmd = test::authalic_binary() + " elements " + dir + "/lh.white.surf.gii " + dir + "/lh.map.surf.gii " + dir +
-                          "/pet.func.gii " + dir + "/el --k 8 --subject s01 --age 70 --json";
+                          "/pet.func.gii " + dir + "/el --k 8 --id s01 --age 70 --json";  // --subject is the same option
   ASSERT_EQ(test::run_command(cmd, &out), 0) << out;
   const auto j = nlohmann::json::parse(out.substr(out.find('{')));
   EXPECT_LT(j["element_area_cv"].get<double>(), 1e-9);

@@ -66,7 +66,7 @@ TEST(RenderCli, DrawsFlatMapsSideBySide) {
   for (Eigen::Index i = 0; i < flat.V.rows(); ++i) flat.V.row(i).head<2>() = (flat.V.row(i).head<2>() - lo.head<2>()) / size;
   authalic::io::write_surface(uv, flat);
   const std::string png = dir + "/maps.png";
-  ASSERT_EQ(run_command(authalic_binary() + " render " + png + " " + uv + " " + uv + " --grid 4 --caption one --caption two --width 300 -q",
+  ASSERT_EQ(run_command(authalic_binary() + " render " + png + " " + uv + " " + uv + " --element-grid 4 --caption one --caption two --width 300 -q",
                         &output),
             0)
       << output;
