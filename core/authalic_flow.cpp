@@ -451,23 +451,17 @@ MatrixXd face_area_newton_displacement(const MatrixXd& UV, const MatrixXi& F, co
                                        const VectorXi& side_mask, const std::vector<char>& free_vertex,
                                        int cg_iterations, FaceAreaResidual residual) {
   const int nv = static_cast<int>(UV.rows());
-  // Columns numbered in the order the faces (the rows) first use their vertices: consecutive rows
-  // then read and write nearby entries of the CG vectors however the input numbers its vertices
-  // (levenberg_marquardt_step is memory-bound; a subdivided mesh's vertex ids are far from its
-  // faces' order).
+  // Columns in the order the rows (faces) first use their vertices: levenberg_marquardt_step is
+  // memory-bound.
   std::vector<int> col(2 * nv, -1);
-  std::vector<char> seen(nv, 0);
   int ncols = 0;
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const int v = F(f, c);
-      if (!free_vertex[v] || seen[v]) continue;
-      seen[v] = 1;
-      const int m = side_mask.size() ? side_mask[v] : 0;
-      if (__builtin_popcount(static_cast<unsigned>(m)) >= 2) continue;  // corners stay
-      if (!(m & (kSideLeft | kSideRight))) col[2 * v] = ncols++;
-      if (!(m & (kSideBottom | kSideTop))) col[2 * v + 1] = ncols++;
-    }
+  for (const int v : vertices_in_face_order(F, nv)) {
+    if (!free_vertex[v]) continue;
+    const int m = side_mask.size() ? side_mask[v] : 0;
+    if (__builtin_popcount(static_cast<unsigned>(m)) >= 2) continue;  // corners stay
+    if (!(m & (kSideLeft | kSideRight))) col[2 * v] = ncols++;
+    if (!(m & (kSideBottom | kSideTop))) col[2 * v + 1] = ncols++;
+  }
   MatrixXd D = MatrixXd::Zero(nv, 2);
   if (ncols == 0) return D;
   const VectorXd a = signed_face_areas_2d(UV, F);
@@ -476,7 +470,6 @@ MatrixXd face_area_newton_displacement(const MatrixXd& UV, const MatrixXi& F, co
   JacobianRows J(ncols, max_rows);
   std::vector<double> r;
   r.reserve(max_rows);
-  int nrows = 0;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     bool touches = false;
     for (int c = 0; c < 3; ++c) touches = touches || free_vertex[F(f, c)];
@@ -492,12 +485,11 @@ MatrixXd face_area_newton_displacement(const MatrixXd& UV, const MatrixXi& F, co
     }
     J.end_row();
     r.push_back(log_area ? std::sqrt(face_target[f]) * std::log(a[f] / face_target[f]) : s * (a[f] - face_target[f]));
-    ++nrows;
   }
   // An inexact Newton step: a fixed budget of conjugate-gradient iterations (50 and 200 agree on
   // fs741 pial: per-face mean 0.0147 vs 0.0138 after 8 steps; a Cholesky factorisation per step
   // took 1.5 s of 330,000 unknowns).
-  const VectorXd delta = levenberg_marquardt_step(J, Eigen::Map<const VectorXd>(r.data(), nrows), cg_iterations);
+  const VectorXd delta = levenberg_marquardt_step(J, Eigen::Map<const VectorXd>(r.data(), J.rows()), cg_iterations);
   for (int v = 0; v < nv; ++v) {
     if (col[2 * v] >= 0) D(v, 0) = delta[col[2 * v]];
     if (col[2 * v + 1] >= 0) D(v, 1) = delta[col[2 * v + 1]];

@@ -18,17 +18,7 @@ JacobianRows::JacobianRows(Eigen::Index cols, std::size_t expected_rows) : cols_
   value_.reserve(6 * expected_rows);
 }
 
-VectorXd JacobianRows::times(const VectorXd& x) const {
-  VectorXd y(rows());
-  for (Eigen::Index i = 0; i < rows(); ++i) {
-    double s = 0;
-    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k) s += value_[k] * x[col_[k]];
-    y[i] = s;
-  }
-  return y;
-}
-
-VectorXd JacobianRows::transpose_times(const VectorXd& x) const {
+VectorXd JacobianRows::transpose_times(const Eigen::Ref<const VectorXd>& x) const {
   VectorXd y = VectorXd::Zero(cols_);
   for (Eigen::Index i = 0; i < rows(); ++i)
     for (int k = row_start_[i]; k < row_start_[i + 1]; ++k) y[col_[k]] += value_[k] * x[i];
@@ -59,7 +49,7 @@ void JacobianRows::normal_times(const VectorXd& x, VectorXd& y) const {
   y += second;
 }
 
-VectorXd levenberg_marquardt_step(const JacobianRows& J, const VectorXd& r, int cg_iterations) {
+VectorXd levenberg_marquardt_step(const JacobianRows& J, const Eigen::Ref<const VectorXd>& r, int cg_iterations) {
   // Preconditioned CG on (Jᵀ J + μ D) δ = −Jᵀ r without forming Jᵀ J: each product is one pass
   // over J's rows (JacobianRows::normal_times).
   const Eigen::Index n = J.cols();

@@ -21,9 +21,8 @@ class JacobianRows {
 
   Eigen::Index rows() const { return static_cast<Eigen::Index>(row_start_.size()) - 1; }
   Eigen::Index cols() const { return cols_; }
-  // y = J x, and y = Jᵀ x.
-  VectorXd times(const VectorXd& x) const;
-  VectorXd transpose_times(const VectorXd& x) const;
+  // y = Jᵀ x.
+  VectorXd transpose_times(const Eigen::Ref<const VectorXd>& x) const;
   // y = Jᵀ (J x), one pass over the rows (each row's entries are read once): the products of
   // the conjugate-gradient iterations, which are memory-bound at a native mesh's size.
   void normal_times(const VectorXd& x, VectorXd& y) const;
@@ -44,6 +43,6 @@ class JacobianRows {
 // iterations (relative residual tolerance 1e-4, δ₀ = 0). The polishes' line searches keep only
 // the steps that help, so an unconverged solve costs accuracy of a step, not safety. The result
 // does not depend on the thread count.
-VectorXd levenberg_marquardt_step(const JacobianRows& J, const VectorXd& r, int cg_iterations);
+VectorXd levenberg_marquardt_step(const JacobianRows& J, const Eigen::Ref<const VectorXd>& r, int cg_iterations);
 
 }  // namespace authalic

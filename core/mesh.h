@@ -111,6 +111,10 @@ int region_winding_on_closed_surface(const MatrixXd& V, const MatrixXi& region, 
 std::vector<std::vector<int>> boundary_loops(const MatrixXi& F, int num_vertices);
 // One-ring of every vertex: its neighbours through an edge of F, sorted and unique.
 std::vector<std::vector<int>> vertex_neighbours(const MatrixXi& F, Eigen::Index num_vertices);
+// The vertices F uses, in the order its faces first use them (face by face, corner by corner). A
+// per-face system numbered this way touches nearby unknowns in consecutive rows, however the input
+// numbers its vertices (a subdivided mesh's vertex ids are far from its faces' order).
+std::vector<int> vertices_in_face_order(const MatrixXi& F, Eigen::Index num_vertices);
 // Grows a vertex set (mark: #V, non-zero = in the set) by `rings` rings of neighbours (adj from
 // vertex_neighbours), in place.
 void grow_by_rings(std::vector<char>& mark, const std::vector<std::vector<int>>& adj, int rings);

@@ -246,15 +246,12 @@ MatrixXd sphere_polish_direction(const MatrixXd& S, const MatrixXi& F, const Vec
                                  const std::vector<char>& free_vertex, int cg_iterations) {
   const Eigen::Index nv = S.rows();
   const double k = a.sum() / measure.sum();
-  // Columns numbered in the order the faces (the rows) first use their vertices, so consecutive
-  // rows read and write nearby entries of the CG vectors however the input numbers its vertices
-  // (a subdivided mesh's vertex ids are far from its faces' order: by vertex id S655's products
-  // took 2.6x as long).
+  // Columns in the order the rows (faces) first use their vertices (by vertex id, S655's CG
+  // products took 2.6x as long).
   std::vector<int> col(static_cast<std::size_t>(nv), -1);
   int m = 0;
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int c = 0; c < 3; ++c)
-      if (free_vertex[F(f, c)] && col[F(f, c)] < 0) col[F(f, c)] = m++;
+  for (const int v : vertices_in_face_order(F, nv))
+    if (free_vertex[v]) col[v] = m++;
   // Tangent basis per free vertex.
   MatrixXd T1 = MatrixXd::Zero(nv, 3), T2 = MatrixXd::Zero(nv, 3);
   for (Eigen::Index v = 0; v < nv; ++v) {

@@ -155,6 +155,19 @@ int region_winding_on_closed_surface(const MatrixXd& V, const MatrixXi& region, 
   return (same > opposite) == (volume > 0) ? 1 : -1;
 }
 
+std::vector<int> vertices_in_face_order(const MatrixXi& F, Eigen::Index num_vertices) {
+  std::vector<char> seen(static_cast<std::size_t>(num_vertices), 0);
+  std::vector<int> order;
+  order.reserve(static_cast<std::size_t>(num_vertices));
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int c = 0; c < 3; ++c)
+      if (!seen[F(f, c)]) {
+        seen[F(f, c)] = 1;
+        order.push_back(F(f, c));
+      }
+  return order;
+}
+
 std::vector<std::vector<int>> vertex_neighbours(const MatrixXi& F, Eigen::Index num_vertices) {
   std::vector<std::vector<int>> adj(static_cast<std::size_t>(num_vertices));
   for (Eigen::Index f = 0; f < F.rows(); ++f)

@@ -273,3 +273,11 @@ TEST(Submesh, MidpointSubdivisionKeepsOriginalVerticesFirst) {
   EXPECT_TRUE(analyze_topology(s.V, s.F).is_sphere());
   EXPECT_TRUE(analyze_topology(s.V, s.F).is_oriented());
 }
+
+TEST(Topology, VerticesInFaceOrderListsEachUsedVertexOnceInTheOrderFacesFirstUseIt) {
+  MatrixXi F(3, 3);
+  F << 5, 2, 7,  //
+      7, 2, 0,   //
+      0, 3, 5;   // vertices 1, 4 and 6 are unused
+  EXPECT_EQ(vertices_in_face_order(F, 8), (std::vector<int>{5, 2, 7, 0, 3}));
+}
